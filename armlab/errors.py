@@ -1,0 +1,35 @@
+"""armlab's exception hierarchy.
+
+Every error raised on bad input is an :class:`ArmlabError`; its message says what was wrong and
+what would have been valid, so the CLI can print it on one line instead of a traceback.
+"""
+
+from __future__ import annotations
+
+__all__ = [
+    "ArmlabError",
+    "ConfigError",
+    "DataError",
+    "ModelError",
+    "EstimationError",
+]
+
+
+class ArmlabError(Exception):
+    """Base class of every error armlab raises deliberately."""
+
+
+class ConfigError(ArmlabError, ValueError):
+    """A configuration value is invalid (unknown choice, out of range, inconsistent)."""
+
+
+class DataError(ArmlabError, ValueError):
+    """A trial file or data array is malformed (missing channel, wrong shape, NaN, ...)."""
+
+
+class ModelError(ArmlabError, ValueError):
+    """An MJCF model is missing, does not compile, or lacks a required element."""
+
+
+class EstimationError(ArmlabError, ValueError):
+    """An estimation problem is ill-posed (too few samples, singular regressor, ...)."""
