@@ -1,0 +1,37 @@
+"""Typed configuration (dataclass schemas registered in Hydra's ConfigStore)."""
+
+from armlab.config.schema import (
+    ArmConfig,
+    CuffConfig,
+    EstimatorConfig,
+    ExperimentConfig,
+    OutputConfig,
+    ReflexConfig,
+    RobotConfig,
+    ScenarioConfig,
+    SensorsConfig,
+    SimConfig,
+)
+from armlab.config.store import (
+    CONFIG_DIR,
+    available_options,
+    register_configs,
+    to_experiment,
+)
+
+__all__ = [
+    "ArmConfig",
+    "CONFIG_DIR",
+    "CuffConfig",
+    "EstimatorConfig",
+    "ExperimentConfig",
+    "OutputConfig",
+    "ReflexConfig",
+    "RobotConfig",
+    "ScenarioConfig",
+    "SensorsConfig",
+    "SimConfig",
+    "available_options",
+    "register_configs",
+    "to_experiment",
+]

@@ -1,0 +1,189 @@
+"""Compose the lab scene from the MJCF model files with ``dm_control.mjcf``.
+
+The scene is: the planar arm (shoulder fixed in the world, as by the paper's seat and shoulder
+belts), the LWR-class robot on its own base, the F/T sensor and cuff on the robot's flange, and a
+``connect`` equality joining the cuff's contact site to the arm's hand site (forces only).
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import mujoco
+import numpy as np
+
+from armlab.config.schema import ArmConfig, CuffConfig, RobotConfig, SimConfig
+from armlab.errors import ModelError
+
+os.environ.setdefault("MUJOCO_GL", "egl")  # dm_control imports a renderer; none is needed here
+from dm_control import mjcf  # noqa: E402
+
+__all__ = [
+    "MODELS_DIR",
+    "MUSCLES",
+    "Scene",
+    "build_scene",
+    "model_file",
+]
+
+MODELS_DIR = Path(__file__).resolve().parents[2] / "models"
+MUSCLES = (
+    "shoulder_flexor",
+    "shoulder_extensor",
+    "elbow_flexor",
+    "elbow_extensor",
+    "biarticular_flexor",
+    "biarticular_extensor",
+)
+ROBOT_POINTS = ("lwr_base",) + tuple(f"lwr_link{i}" for i in range(1, 8))
+# The rigid-cuff equality: time constant 2 timesteps (MuJoCo's stable minimum) and impedance
+# close to 1, i.e. as stiff as the solver allows.
+CONNECT_SOLIMP = (0.99, 0.999, 0.001, 0.5, 2.0)
+
+
+def model_file(*parts: str) -> Path:
+    """Path of a file under ``models/``; raises ModelError naming what exists if missing."""
+    path = MODELS_DIR.joinpath(*parts)
+    if not path.is_file():
+        folder = path.parent
+        have = sorted(p.name for p in folder.glob("*.xml")) if folder.is_dir() else []
+        raise ModelError(f"model file {path} not found; available in {folder}: {have}")
+    return path
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class Scene:
+    """A compiled scene and the addresses armlab needs in it.
+
+    Attributes:
+        model: the compiled MjModel.
+        xml: the composed MJCF (saved with each run), ``assets`` its mesh/include assets.
+        arm_qpos, arm_dof: (2,) qpos / dof addresses of shoulder and elbow.
+        robot_qpos, robot_dof: (7,) qpos / dof addresses of the robot joints.
+        cuff_dof: dof addresses of the cuff slide joints (empty for a rigid cuff).
+        muscle_act: (6,) actuator ids of the muscles (order of :data:`MUSCLES`), also their
+            ``act`` indices; robot_act: (7,) actuator ids of the robot servos.
+        sensors: sensor name (without namespace) -> slice into ``sensordata``.
+        l1, l2: m, arm segment lengths (shoulder-elbow, elbow-hand) read from the model.
+        shoulder_pos: (3,) m, world position of the shoulder joint.
+        contact_site, hand_site, flange_site: site ids.
+    """
+
+    model: mujoco.MjModel
+    xml: str
+    assets: dict
+    arm_qpos: np.ndarray
+    arm_dof: np.ndarray
+    robot_qpos: np.ndarray
+    robot_dof: np.ndarray
+    cuff_dof: np.ndarray
+    muscle_act: np.ndarray
+    robot_act: np.ndarray
+    sensors: dict[str, slice]
+    l1: float
+    l2: float
+    shoulder_pos: np.ndarray
+    contact_site: int
+    hand_site: int
+    flange_site: int
+
+    def sensor(self, sensordata: np.ndarray, name: str) -> np.ndarray:
+        """Slice one named sensor out of ``(..., nsensordata)`` sensor data."""
+        try:
+            return sensordata[..., self.sensors[name]]
+        except KeyError:
+            raise ModelError(f"scene has no sensor {name!r}; available: {sorted(self.sensors)}") from None
+
+
+def _compose(arm: ArmConfig, cuff: CuffConfig, robot: RobotConfig, sim: SimConfig) -> mjcf.RootElement:
+    root = mjcf.RootElement(model="armlab_scene")
+    root.compiler.angle = "radian"
+    root.compiler.autolimits = True
+    root.option.timestep = sim.timestep_s
+    root.option.integrator = sim.integrator
+
+    arm_model = mjcf.from_path(str(model_file(arm.model, f"{arm.model}_{arm.muscle}.xml")))
+    root.worldbody.add("site", name="shoulder_mount", pos=list(arm.shoulder_pos_m)).attach(arm_model)
+
+    robot_model = mjcf.from_path(str(model_file(robot.model, f"{robot.model}.xml")))
+    root.worldbody.add("site", name="robot_mount", pos=list(robot.base_pos_m)).attach(robot_model)
+
+    cuff_model = mjcf.from_path(str(model_file("common", "cuff.xml")))
+    flange = robot_model.find("site", "flange")
+    if flange is None:
+        raise ModelError(f"robot model {robot.model!r} has no site 'flange' to mount the cuff on")
+    flange.attach(cuff_model)
+    hand = arm_model.find("site", "hand")
+    if hand is None:
+        raise ModelError(f"arm model {arm.model!r} has no site 'hand' for the cuff")
+    shell_model = mjcf.from_path(str(model_file("common", "cuff_shell.xml")))
+    shell_model.find("body", "shell").inertial.mass = cuff.mass_kg
+    hand.attach(shell_model)
+    for joint in cuff_model.find_all("joint"):
+        if cuff.rigid:
+            joint.remove()
+        else:
+            joint.stiffness = cuff.stiffness_N_per_m
+            joint.damping = cuff.damping_Ns_per_m
+
+    contact = cuff_model.find("site", "contact")
+    tc = 2.0 * sim.timestep_s
+    root.equality.add(
+        "connect", name="cuff_hand", site1=contact, site2=hand, solref=[tc, 1.0], solimp=list(CONNECT_SOLIMP)
+    )
+    # positions for drawing and for the truth channels
+    for site in ("shoulder_site", "elbow_site", "hand"):
+        root.sensor.add("framepos", name=f"p_{site}", objtype="site", objname=arm_model.find("site", site))
+    for body in ROBOT_POINTS:
+        root.sensor.add("framepos", name=f"p_{body}", objtype="body", objname=robot_model.find("body", body))
+    root.sensor.add("framepos", name="p_flange", objtype="site", objname=flange)
+    root.sensor.add("framepos", name="p_contact", objtype="site", objname=contact)
+    return root
+
+
+def build_scene(arm: ArmConfig, cuff: CuffConfig, robot: RobotConfig, sim: SimConfig) -> Scene:
+    """Compose, compile and index the lab scene."""
+    root = _compose(arm, cuff, robot, sim)
+    xml = root.to_xml_string()
+    assets = root.get_assets()
+    try:
+        model = mujoco.MjModel.from_xml_string(xml, assets)
+    except ValueError as exc:
+        raise ModelError(f"composed scene does not compile: {exc}") from None
+
+    def jnt(name: str) -> int:
+        return mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, name)
+
+    arm_j = [jnt(f"{arm.model}/{n}") for n in ("shoulder", "elbow")]
+    robot_j = [jnt(f"{robot.model}/lwr_j{i}") for i in range(1, 8)]
+    cuff_j = [j for j in (jnt(f"{robot.model}/cuff/slide_{a}") for a in "xyz") if j >= 0]
+    if min(arm_j + robot_j) < 0:
+        raise ModelError("scene lacks the expected arm (shoulder, elbow) or robot (lwr_j1..7) joints")
+    muscle_act = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, f"{arm.model}/{n}") for n in MUSCLES]
+    robot_act = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, f"{robot.model}/lwr_a{i}") for i in range(1, 8)]
+    if min(muscle_act + robot_act) < 0:
+        raise ModelError(f"scene lacks muscle actuators {list(MUSCLES)} or robot servos lwr_a1..7")
+    sensors = {}
+    for i in range(model.nsensor):
+        name = model.sensor(i).name.split("/")[-1]
+        adr, dim = int(model.sensor_adr[i]), int(model.sensor_dim[i])
+        sensors[name] = slice(adr, adr + dim)
+
+    def site(name: str) -> int:
+        return mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, name)
+
+    hand_site = site(f"{arm.model}/hand")
+    forearm = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"{arm.model}/forearm")
+    return Scene(
+        model=model, xml=xml, assets=assets,
+        arm_qpos=model.jnt_qposadr[arm_j].copy(), arm_dof=model.jnt_dofadr[arm_j].copy(),
+        robot_qpos=model.jnt_qposadr[robot_j].copy(), robot_dof=model.jnt_dofadr[robot_j].copy(),
+        cuff_dof=model.jnt_dofadr[cuff_j].copy() if cuff_j else np.zeros(0, int),
+        muscle_act=np.asarray(muscle_act), robot_act=np.asarray(robot_act), sensors=sensors,
+        l1=float(np.linalg.norm(model.body_pos[forearm])), l2=float(np.linalg.norm(model.site_pos[hand_site])),
+        shoulder_pos=np.asarray(arm.shoulder_pos_m, float),
+        contact_site=site(f"{robot.model}/cuff/contact"), hand_site=hand_site,
+        flange_site=site(f"{robot.model}/flange"),
+    )

@@ -1,0 +1,199 @@
+"""Named sensor presets and the sensor suite of the conditioning-window protocol.
+
+The lab of the conditioning paper (seed 000, section IV-A) pushes the hand with a KUKA/DLR
+lightweight robot (LWR-III class) carrying a six-axis JR3 force/torque sensor; forces, torques
+and robot positions are recorded by VxWorks at 1 kHz. The presets below give each of those
+instruments a :class:`~armlab.sensors.channel.ChannelSpec`. Where a figure could not be checked
+against a datasheet it is marked *assumption* with the reasoning behind it.
+
+:func:`measure` applies a :class:`SensorSuite` to the clean simulated channels.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, fields
+
+import numpy as np
+
+from armlab.errors import ConfigError
+from armlab.sensors.channel import ChannelSpec, apply_channel
+
+__all__ = [
+    "JR3_FORCE",
+    "JR3_TORQUE",
+    "LWR_ENCODER",
+    "LWR_JOINT_TORQUE",
+    "SENSOR_PRESETS",
+    "get_preset",
+    "SensorSuite",
+    "CHANNEL_SPEC_FIELDS",
+    "measure",
+]
+
+# --- JR3 six-axis F/T sensor (85M35A / 67M25A class), sampled at 1 kHz ------------------------
+# Rated range assumed 200 N (Fx, Fy) and 12 N·m (Mx, My): a common 85M35A load rating. JR3's DSP
+# receivers report each axis as a signed 16-bit count with full scale at 16384 counts (JR3 DSP
+# manual, recalled, not re-checked here), so one count is 200/16384 = 0.0122 N and
+# 12/16384 = 7.3e-4 N·m.
+# Noise, residual offset after taring and drift: assumptions, no datasheet figure found. Noise of
+# a few counts is typical of strain-gauge F/T sensors at 1 kHz; the offset after taring comes from
+# cuff preload and hysteresis (of order 0.1 N), the drift from gauge warm-up (~0.1 N per minute).
+# Bandwidth: the JR3 DSP offers cascaded low-pass outputs (cut-offs 500, 125, 31.25 Hz, ... at its
+# 8 kHz internal rate, JR3 DSP manual, recalled); 500 Hz is the Nyquist frequency of a 1 kHz log,
+# so the 125 Hz output is the usable one, modelled as a 2nd-order Butterworth (assumption).
+# Delay: one 1 ms VxWorks cycle between the sensor sample and the logged value (assumption).
+JR3_FORCE = ChannelSpec(
+    noise_std=0.05,  # N, assumption (~4 counts of 0.0122 N)
+    bias_std=0.1,  # N, assumption (residual offset after taring with the cuff mounted)
+    drift_per_s=0.002,  # N/s, assumption (~0.1 N per minute of thermal drift)
+    quant_step=200.0 / 16384,  # N, 200 N full scale / 16384 counts (JR3 DSP, see above)
+    bandwidth_hz=125.0,  # Hz, JR3 DSP filter-2 output (see above)
+    filter_order=2,
+    delay_s=0.001,  # s, one 1 kHz cycle (assumption)
+)
+JR3_TORQUE = ChannelSpec(
+    noise_std=0.003,  # N·m, assumption (~4 counts of 7.3e-4 N·m)
+    bias_std=0.005,  # N·m, assumption (same relative size as the force offset)
+    drift_per_s=1e-4,  # N·m/s, assumption (same relative size as the force drift)
+    quant_step=12.0 / 16384,  # N·m, 12 N·m full scale / 16384 counts (JR3 DSP, see above)
+    bandwidth_hz=125.0,  # Hz, JR3 DSP filter-2 output (see above)
+    filter_order=2,
+    delay_s=0.001,  # s, one 1 kHz cycle (assumption)
+)
+
+# --- LWR-III class robot ------------------------------------------------------------------------
+# Link-side joint position sensor: absolute optical sensor resolving 0.01° (DLR, "Light-Weight
+# Robot III: joint position sensor", dlr.de/rm). Absolute, so no offset after taring and no drift;
+# a tiny white noise well below one step stands for electronic jitter (assumption).
+LWR_ENCODER = ChannelSpec(
+    noise_std=2e-5,  # rad, assumption (about 1/9 of a step)
+    quant_step=math.radians(0.01),  # rad, 0.01° = 1.745e-4 rad (DLR LWR-III joint position sensor)
+)
+# Joint torque sensors: strain gauges on radial beams in each joint (DLR LWR-III). No noise or
+# resolution figure found: assumptions. Resolution: a 16-bit reading over ±176 N·m (the largest
+# LWR4+ joint torque rating) gives 0.0054 N·m, rounded to 0.005 N·m. Noise 0.05 N·m, offset
+# 0.3 N·m and drift 0.002 N·m/s: joint torque sensors are not tared before each trial and their
+# offset depends on temperature. Delay: one 1 ms robot-interface cycle (assumption).
+LWR_JOINT_TORQUE = ChannelSpec(
+    noise_std=0.05,  # N·m, assumption
+    bias_std=0.3,  # N·m, assumption (untared offset)
+    drift_per_s=0.002,  # N·m/s, assumption (thermal drift)
+    quant_step=0.005,  # N·m, assumption (16 bit over ±176 N·m)
+    delay_s=0.001,  # s, one 1 kHz cycle (assumption)
+)
+
+SENSOR_PRESETS: dict[str, ChannelSpec] = {
+    "jr3_force": JR3_FORCE,
+    "jr3_torque": JR3_TORQUE,
+    "lwr_encoder": LWR_ENCODER,
+    "lwr_joint_torque": LWR_JOINT_TORQUE,
+    "ideal": ChannelSpec.ideal(),
+}
+
+
+def get_preset(name: str) -> ChannelSpec:
+    """Return the preset called ``name`` (a key of :data:`SENSOR_PRESETS`)."""
+    try:
+        return SENSOR_PRESETS[name]
+    except KeyError:
+        raise ConfigError(f"unknown sensor preset {name!r}; valid names: {sorted(SENSOR_PRESETS)}") from None
+
+
+# Clean channel name -> SensorSuite field. The order is fixed forever: each channel's random stream
+# is the child at this position, so new channels must be appended at the end.
+CHANNEL_SPEC_FIELDS: dict[str, str] = {
+    "ft_force": "ft_force",
+    "ft_torque": "ft_torque",
+    "robot_q": "encoder",
+    "robot_tau": "joint_torque",
+}
+
+
+@dataclass(frozen=True, kw_only=True)
+class SensorSuite:
+    """The sensors the conditioning-window protocol records.
+
+    Attributes:
+        ft_force: F/T sensor forces, N (channel ``ft_force``).
+        ft_torque: F/T sensor torques, N·m (channel ``ft_torque``).
+        encoder: robot joint positions, rad (channel ``robot_q``).
+        joint_torque: robot joint torque sensors, N·m (channel ``robot_tau``).
+    """
+
+    ft_force: ChannelSpec
+    ft_torque: ChannelSpec
+    encoder: ChannelSpec
+    joint_torque: ChannelSpec
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if not isinstance(value, ChannelSpec):
+                raise ConfigError(f"SensorSuite.{f.name} must be a ChannelSpec, got {type(value).__name__}")
+
+    @classmethod
+    def realistic(cls) -> SensorSuite:
+        """JR3-class F/T sensor and LWR-III encoders and joint torque sensors (the presets)."""
+        return cls(
+            ft_force=JR3_FORCE, ft_torque=JR3_TORQUE, encoder=LWR_ENCODER, joint_torque=LWR_JOINT_TORQUE
+        )
+
+    @classmethod
+    def ideal(cls) -> SensorSuite:
+        """Perfect sensors everywhere: measured channels equal the clean ones."""
+        ideal = ChannelSpec.ideal()
+        return cls(ft_force=ideal, ft_torque=ideal, encoder=ideal, joint_torque=ideal)
+
+    def spec_for(self, channel: str) -> ChannelSpec:
+        """The spec applied to clean channel ``channel`` (a key of :data:`CHANNEL_SPEC_FIELDS`)."""
+        try:
+            return getattr(self, CHANNEL_SPEC_FIELDS[channel])
+        except KeyError:
+            raise ConfigError(
+                f"no sensor model for channel {channel!r}; valid channels: {list(CHANNEL_SPEC_FIELDS)}"
+            ) from None
+
+
+def measure(
+    clean: Mapping[str, np.ndarray],
+    suite: SensorSuite,
+    fs_hz: float,
+    rng: np.random.Generator,
+    t0_s: np.ndarray | None = None,
+) -> dict[str, np.ndarray]:
+    """Apply the suite's sensor models to clean simulated channels.
+
+    One child seed per known channel is drawn from ``rng`` in the fixed order of
+    :data:`CHANNEL_SPEC_FIELDS`, whether or not that channel is present, and each channel gets its
+    own generator from its seed. A channel's measurement therefore depends only on ``rng``'s state
+    and its own data: adding or removing other channels does not change it.
+
+    Args:
+        clean: channel name -> (n_trials, n_samples, n_axes) clean signal; names among
+            ``ft_force`` (N), ``ft_torque`` (N·m), ``robot_q`` (rad), ``robot_tau`` (N·m).
+        suite: the sensor models.
+        fs_hz: sample rate, Hz.
+        rng: the only source of randomness; advanced by a fixed number of draws.
+        t0_s: (n_trials,) s since taring at each record's first sample (see
+            :func:`~armlab.sensors.channel.apply_channel`).
+
+    Returns:
+        The measured channels under the same names, float64, same shapes.
+
+    Raises:
+        ConfigError: a name in ``clean`` has no sensor model.
+    """
+    unknown = sorted(set(clean) - set(CHANNEL_SPEC_FIELDS))
+    if unknown:
+        raise ConfigError(
+            f"no sensor model for channels {unknown}; valid channels: {list(CHANNEL_SPEC_FIELDS)}"
+        )
+    seeds = rng.integers(0, 2**63, size=len(CHANNEL_SPEC_FIELDS), dtype=np.int64)
+    out: dict[str, np.ndarray] = {}
+    for seed, name in zip(seeds, CHANNEL_SPEC_FIELDS, strict=True):
+        if name in clean:
+            child = np.random.default_rng(int(seed))
+            out[name] = apply_channel(clean[name], fs_hz, suite.spec_for(name), child, t0_s=t0_s)
+    return out

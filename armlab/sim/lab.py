@@ -1,0 +1,159 @@
+"""The simulated laboratory: a trial plan in, recorded trials (and the model's truth) out.
+
+config -> scene -> settled hold -> robot joint targets for every trial -> batched rollout ->
+sensor models -> the measurement processing a real lab does on its robot (hand position from the
+encoders by forward kinematics, the F/T reading rotated into the shoulder frame) -> TrialSet.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.interpolate import CubicSpline
+
+from armlab.config.schema import ExperimentConfig
+from armlab.data.trial import TrialSet
+from armlab.errors import ConfigError
+from armlab.models.ground_truth import GroundTruth, ground_truth
+from armlab.models.robot_fk import RobotKinematics
+from armlab.models.scene import MUSCLES, ROBOT_POINTS, Scene, build_scene
+from armlab.perturbations.quintic import quintic_profile
+from armlab.perturbations.scenario import Scenario, TrialPlan
+from armlab.sensors.presets import SensorSuite, measure
+from armlab.sim.hold import HoldState, hand_world, settle
+from armlab.sim.robot_ik import solve_ik
+from armlab.sim.rollout import simulate
+
+__all__ = [
+    "LabRecording",
+    "PATH_POINTS",
+    "record_trials",
+    "robot_targets",
+]
+
+PATH_POINTS = 41  # IK points along each direction's hand path (spline-interpolated in between)
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class LabRecording:
+    """What a simulated session produced.
+
+    Attributes:
+        trials: the recorded trials (measured channels + ``true_*`` channels).
+        truth: ground truth at the operating point.
+        scene: the compiled scene (its MJCF is saved with the run).
+        hold: the settled pre-perturbation state.
+    """
+
+    trials: TrialSet
+    truth: GroundTruth
+    scene: Scene
+    hold: HoldState
+
+
+def robot_targets(
+    scene: Scene, hold: HoldState, q0: np.ndarray, plan: TrialPlan, directions: np.ndarray, t_rel: np.ndarray
+) -> np.ndarray:
+    """Robot joint targets of every trial at every physics step.
+
+    The hand path of each direction, x(s) = f(q0 + s dq_f) for s in [0, 1], is solved by IK once
+    on :data:`PATH_POINTS` points and spline-interpolated in s; every trial then evaluates it at
+    s(t) = quintic((t - t_onset) / T_k) (eq. 16), so durations share the path.
+
+    Args:
+        t_rel: (n_steps,) s, time of each physics step relative to the onset.
+
+    Returns:
+        (n_trials, n_steps, 7) rad.
+    """
+    s_grid = np.linspace(0.0, 1.0, PATH_POINTS)
+    splines = []
+    for dq_f in directions:
+        path = hand_world(scene, q0 + s_grid[:, None] * dq_f)
+        splines.append(CubicSpline(s_grid, solve_ik(scene, path, hold.robot_target), axis=0))
+    out = np.empty((plan.n_trials, t_rel.size, 7))
+    for i in range(plan.n_trials):
+        s, _, _ = quintic_profile(t_rel, float(plan.t_k_s[i]))
+        out[i] = splines[plan.direction[i]](s)
+    return out
+
+
+def record_trials(cfg: ExperimentConfig, scenario: Scenario, plan: TrialPlan, rng: np.random.Generator) -> LabRecording:
+    """Simulate and record every trial of ``plan``.
+
+    Args:
+        cfg: the experiment configuration.
+        scenario: the perturbation timeline (record length, pre-onset hold).
+        plan: the concrete trials.
+        rng: generator for the sensor noise (the plan was drawn before).
+    """
+    scene = build_scene(cfg.arm, cfg.cuff, cfg.robot, cfg.sim)
+    hold = settle(scene, cfg.arm, cfg.sim.settle_s)
+    truth = ground_truth(scene, hold.state, cfg.cuff.rigid)
+
+    fs = cfg.sensors.fs_hz
+    dt = scene.model.opt.timestep
+    substeps = int(round(1.0 / (fs * dt)))
+    if substeps < 1 or abs(substeps * fs * dt - 1.0) > 1e-9:
+        raise ConfigError(
+            f"sensors.fs_hz={fs} must divide the physics rate 1/sim.timestep_s={1 / dt:g} Hz into whole steps"
+        )
+    n_samples = int(round(scenario.record_s * fs))
+    onset = int(round(scenario.pre_onset_record_s * fs))
+    n_steps = n_samples * substeps
+    # sample j is the state after physics step (j + 1) * substeps - 1, i.e. at (j + 1) / fs on the
+    # step clock; the perturbation starts at sample `onset`, so at (onset + 1) / fs
+    t_rel = (np.arange(n_steps) + 1) * dt - (onset + 1) / fs
+    targets = robot_targets(scene, hold, np.asarray(cfg.arm.q0, float), plan, scenario.directions_rad, t_rel)
+    sim = simulate(scene, hold.state, targets, hold.activation, cfg.reflex, substeps=substeps)
+
+    sd = sim.sensordata
+    clean = {
+        "robot_q": np.concatenate([scene.sensor(sd, f"lwr_q{i}") for i in range(1, 8)], axis=-1),
+        "robot_tau": np.concatenate([scene.sensor(sd, f"lwr_tau{i}") for i in range(1, 8)], axis=-1),
+        "ft_force": scene.sensor(sd, "ft_force"),
+        "ft_torque": scene.sensor(sd, "ft_torque"),
+    }
+    suite = SensorSuite.realistic() if cfg.sensors.preset == "realistic" else SensorSuite.ideal()
+    # drift accumulates from taring, before the random wait
+    measured = measure(clean, suite, fs, rng, t0_s=plan.wait_s)
+    fk = RobotKinematics.from_scene(scene)
+    contact, ft_rot = fk.forward(measured["robot_q"])
+    hand_pos = (contact - scene.shoulder_pos)[..., :2]
+    hand_force = np.einsum("...ij,...j->...i", ft_rot, measured["ft_force"])[..., :2]
+
+    channels = {
+        "hand_pos": hand_pos,
+        "hand_force": hand_force,
+        **measured,
+        "true_arm_q": sim.qpos[..., scene.arm_qpos],
+        "true_hand_pos": (scene.sensor(sd, "p_hand") - scene.shoulder_pos)[..., :2],
+        "true_activation": sim.activation,
+        "true_arm_points": np.concatenate(
+            [scene.sensor(sd, f"p_{s}") for s in ("shoulder_site", "elbow_site", "hand")], axis=-1
+        ),
+        "true_robot_points": np.concatenate(
+            [scene.sensor(sd, f"p_{b}") for b in ROBOT_POINTS] + [scene.sensor(sd, "p_flange")], axis=-1
+        ),
+    }
+    units = {
+        "hand_pos": "m", "hand_force": "N", "robot_q": "rad", "robot_tau": "N*m", "ft_force": "N",
+        "ft_torque": "N*m", "true_arm_q": "rad", "true_hand_pos": "m", "true_activation": "1",
+        "true_arm_points": "m", "true_robot_points": "m",
+    }
+    trials = TrialSet(
+        fs_hz=fs,
+        onset_index=np.full(plan.n_trials, onset),
+        channels=channels,
+        units=units,
+        trial_meta={
+            "group": plan.group, "direction": plan.direction, "T_k_s": plan.t_k_s,
+            "wait_s": plan.wait_s, "validate": plan.validate,
+        },
+        attrs={
+            "protocol": cfg.protocol_name, "seed": cfg.seed, "arm_l1_m": scene.l1, "arm_l2_m": scene.l2,
+            "muscles": list(MUSCLES), "ground_truth": truth.as_dict(),
+        },
+    )
+    return LabRecording(trials=trials, truth=truth, scene=scene, hold=hold)

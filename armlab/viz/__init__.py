@@ -1,0 +1,25 @@
+"""Figures and Rerun recordings: the only package that imports matplotlib or rerun.
+
+``armlab.viz.figures`` imports matplotlib when imported; ``armlab.viz.recording`` imports rerun
+only inside its functions.
+"""
+
+from armlab.viz.figures import (
+    plot_error_vs_window,
+    plot_validation,
+    plot_window_sweep,
+)
+from armlab.viz.recording import (
+    DEFAULT_SCALAR_CHANNELS,
+    view_command,
+    write_recording,
+)
+
+__all__ = [
+    "DEFAULT_SCALAR_CHANNELS",
+    "plot_error_vs_window",
+    "plot_validation",
+    "plot_window_sweep",
+    "view_command",
+    "write_recording",
+]

@@ -1,0 +1,31 @@
+"""Output-path checks shared by the figure and recording writers (no plotting imports here)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from armlab.errors import DataError
+
+__all__ = ["fresh_path"]
+
+
+def fresh_path(path: str | Path, suffix: str) -> Path:
+    """Return ``path`` as a :class:`Path` after checking that nothing is there yet.
+
+    Creates the parent folder if needed. Output files are never overwritten: every run writes
+    into its own fresh run directory.
+
+    Args:
+        path: where the file will be written.
+        suffix: the expected file suffix, e.g. ``".png"`` or ``".rrd"``.
+
+    Raises:
+        DataError: if ``path`` already exists or has another suffix.
+    """
+    p = Path(path)
+    if p.suffix.lower() != suffix:
+        raise DataError(f"output path {str(p)!r} must end in {suffix!r}")
+    if p.exists():
+        raise DataError(f"refusing to overwrite existing file {str(p)!r}; write into a fresh run directory")
+    p.parent.mkdir(parents=True, exist_ok=True)
+    return p
