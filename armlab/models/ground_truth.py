@@ -46,7 +46,12 @@ class GroundTruth:
     q_op: np.ndarray
 
     def as_dict(self) -> dict:
-        return {"K": self.K.tolist(), "D": self.D.tolist(), "xi": self.xi.tolist(), "q_op": self.q_op.tolist()}
+        return {
+            "K": self.K.tolist(),
+            "D": self.D.tolist(),
+            "xi": self.xi.tolist(),
+            "q_op": self.q_op.tolist(),
+        }
 
 
 def joint_impedance(scene: Scene, state: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

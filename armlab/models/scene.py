@@ -162,7 +162,9 @@ def build_scene(arm: ArmConfig, cuff: CuffConfig, robot: RobotConfig, sim: SimCo
     if min(arm_j + robot_j) < 0:
         raise ModelError("scene lacks the expected arm (shoulder, elbow) or robot (lwr_j1..7) joints")
     muscle_act = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, f"{arm.model}/{n}") for n in MUSCLES]
-    robot_act = [mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, f"{robot.model}/lwr_a{i}") for i in range(1, 8)]
+    robot_act = [
+        mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, f"{robot.model}/lwr_a{i}") for i in range(1, 8)
+    ]
     if min(muscle_act + robot_act) < 0:
         raise ModelError(f"scene lacks muscle actuators {list(MUSCLES)} or robot servos lwr_a1..7")
     sensors = {}
@@ -177,13 +179,21 @@ def build_scene(arm: ArmConfig, cuff: CuffConfig, robot: RobotConfig, sim: SimCo
     hand_site = site(f"{arm.model}/hand")
     forearm = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, f"{arm.model}/forearm")
     return Scene(
-        model=model, xml=xml, assets=assets,
-        arm_qpos=model.jnt_qposadr[arm_j].copy(), arm_dof=model.jnt_dofadr[arm_j].copy(),
-        robot_qpos=model.jnt_qposadr[robot_j].copy(), robot_dof=model.jnt_dofadr[robot_j].copy(),
+        model=model,
+        xml=xml,
+        assets=assets,
+        arm_qpos=model.jnt_qposadr[arm_j].copy(),
+        arm_dof=model.jnt_dofadr[arm_j].copy(),
+        robot_qpos=model.jnt_qposadr[robot_j].copy(),
+        robot_dof=model.jnt_dofadr[robot_j].copy(),
         cuff_dof=model.jnt_dofadr[cuff_j].copy() if cuff_j else np.zeros(0, int),
-        muscle_act=np.asarray(muscle_act), robot_act=np.asarray(robot_act), sensors=sensors,
-        l1=float(np.linalg.norm(model.body_pos[forearm])), l2=float(np.linalg.norm(model.site_pos[hand_site])),
+        muscle_act=np.asarray(muscle_act),
+        robot_act=np.asarray(robot_act),
+        sensors=sensors,
+        l1=float(np.linalg.norm(model.body_pos[forearm])),
+        l2=float(np.linalg.norm(model.site_pos[hand_site])),
         shoulder_pos=np.asarray(arm.shoulder_pos_m, float),
-        contact_site=site(f"{robot.model}/cuff/contact"), hand_site=hand_site,
+        contact_site=site(f"{robot.model}/cuff/contact"),
+        hand_site=hand_site,
         flange_site=site(f"{robot.model}/flange"),
     )

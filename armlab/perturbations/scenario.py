@@ -87,6 +87,7 @@ class Scenario:
             wait_s=self.wait_s,
             pre_onset_record_s=self.pre_onset_record_s,
             post_window_record_s=self.post_window_record_s,
+            extension_t_obs_s=self.extension_t_obs_s,
         )
 
 

@@ -56,15 +56,20 @@ def window_specs(scenario: Scenario, estimator: EstimatorConfig) -> list[WindowS
     """
     if estimator.t_obs_s is not None:
         k = int(scenario.k_values[-1])
-        return [WindowSpec(k=k, t_k_s=float(scenario.t_k_s[-1]), t_obs_s=float(t), extension=True)
-                for t in sorted(estimator.t_obs_s)]
+        return [
+            WindowSpec(k=k, t_k_s=float(scenario.t_k_s[-1]), t_obs_s=float(t), extension=True)
+            for t in sorted(estimator.t_obs_s)
+        ]
     specs = [
         WindowSpec(k=int(k), t_k_s=float(tk), t_obs_s=float(to), extension=False)
-        for k, tk, to in zip(scenario.k_values, scenario.t_k_s, scenario.t_obs_s)
+        for k, tk, to in zip(scenario.k_values, scenario.t_k_s, scenario.t_obs_s, strict=True)
     ]
     last = specs[-1]
-    specs += [WindowSpec(k=last.k, t_k_s=last.t_k_s, t_obs_s=float(t), extension=True)
-              for t in scenario.extension_t_obs_s if t > last.t_obs_s]
+    specs += [
+        WindowSpec(k=last.k, t_k_s=last.t_k_s, t_obs_s=float(t), extension=True)
+        for t in scenario.extension_t_obs_s
+        if t > last.t_obs_s
+    ]
     return specs
 
 
@@ -80,7 +85,7 @@ def _check_windows(trials: TrialSet, specs: list[WindowSpec]) -> np.ndarray:
     fs = trials.fs_hz
     samples = np.array([int(round(s.t_obs_s * fs)) for s in specs])
     available = trials.n_samples - int(np.max(trials.onset_index))
-    too_long = [s.t_obs_s for s, n in zip(specs, samples) if n > available]
+    too_long = [s.t_obs_s for s, n in zip(specs, samples, strict=True) if n > available]
     if too_long:
         raise ConfigError(
             f"observation window(s) {too_long} s are longer than the recorded data after onset "
@@ -89,8 +94,8 @@ def _check_windows(trials: TrialSet, specs: list[WindowSpec]) -> np.ndarray:
     return samples
 
 
-def _entry(est: LSEstimate, truth: dict, fit, reduced: bool) -> dict:
-    K_true, D_true, xi_true = (np.asarray(truth[k]) for k in ("K", "D", "xi"))
+def _entry(est: LSEstimate, truth: dict | None, fit, reduced: bool) -> dict:
+    """One model's estimate in a window; errors against ground truth where it is known."""
     out = {
         "cond": float(est.cond),
         "K": est.K.tolist(),
@@ -99,22 +104,28 @@ def _entry(est: LSEstimate, truth: dict, fit, reduced: bool) -> dict:
         "eig_Ds": criteria.eig_symmetric_part(est.D).tolist(),
         "asym_K": float(criteria.asymmetry(est.K)),
         "asym_D": float(criteria.asymmetry(est.D)),
-        "K_rel_err": criteria.relative_error(est.K, K_true),
-        "D_rel_err": criteria.relative_error(est.D, D_true),
-        "std": dict(zip(est.names, est.std.tolist())),
+        "std": dict(zip(est.names, est.std.tolist(), strict=True)),
         "rms_residual_Nm": float(est.rms_residual),
         "validation": {"vaf_pct": fit.vaf.tolist(), "rmse_Nm": fit.rmse.tolist()},
     }
     if not reduced:
         out["xi"] = est.xi.tolist()
-        out["xi_rel_err"] = criteria.relative_error(est.xi, xi_true)
+    if truth is not None:
+        out["K_rel_err"] = criteria.relative_error(est.K, np.asarray(truth["K"]))
+        out["D_rel_err"] = criteria.relative_error(est.D, np.asarray(truth["D"]))
+        if not reduced:
+            out["xi_rel_err"] = criteria.relative_error(est.xi, np.asarray(truth["xi"]))
     return out
 
 
 def _criteria(t_obs: np.ndarray, ests: list[LSEstimate], cfg: EstimatorConfig) -> dict:
     pd = np.array([criteria.is_positive_definite(e.K) for e in ests])
-    sym = np.array([criteria.asymmetry(e.K) < cfg.symmetry_tol and criteria.asymmetry(e.D) < cfg.symmetry_tol
-                    for e in ests])
+    sym = np.array(
+        [
+            criteria.asymmetry(e.K) < cfg.symmetry_tol and criteria.asymmetry(e.D) < cfg.symmetry_tol
+            for e in ests
+        ]
+    )
     params = np.stack([e.zeta for e in ests])
     const = criteria.quasi_constant_flags(params, cfg.constancy_tol)
     return {
@@ -124,7 +135,9 @@ def _criteria(t_obs: np.ndarray, ests: list[LSEstimate], cfg: EstimatorConfig) -
     }
 
 
-def estimate_protocol(trials: TrialSet, estimator: EstimatorConfig, specs: list[WindowSpec]) -> tuple[dict, dict]:
+def estimate_protocol(
+    trials: TrialSet, estimator: EstimatorConfig, specs: list[WindowSpec]
+) -> tuple[dict, dict]:
     """Run both least-squares models on every window and score them against ground truth.
 
     Args:
@@ -145,8 +158,13 @@ def estimate_protocol(trials: TrialSet, estimator: EstimatorConfig, specs: list[
         lowpass_hz=estimator.lowpass_hz, filter_order=estimator.filter_order, baseline_s=estimator.baseline_s
     )
     signals: JointSignals = joint_signals(
-        trials.channel("hand_pos"), trials.channel("hand_force"), trials.fs_hz, trials.onset_index,
-        float(trials.attrs["arm_l1_m"]), float(trials.attrs["arm_l2_m"]), proc,
+        trials.channel("hand_pos"),
+        trials.channel("hand_force"),
+        trials.fs_hz,
+        trials.onset_index,
+        float(trials.attrs["arm_l1_m"]),
+        float(trials.attrs["arm_l2_m"]),
+        proc,
     )
     group = np.asarray(trials.trial_meta["group"])
     held_out = np.asarray(trials.trial_meta["validate"], bool)
@@ -158,30 +176,43 @@ def estimate_protocol(trials: TrialSet, estimator: EstimatorConfig, specs: list[
 
     windows = []
     series = {}
-    for spec, n, e_full, e_red in zip(specs, samples, full, reduced):
+    for spec, n, e_full, e_red in zip(specs, samples, full, reduced, strict=True):
         val = np.flatnonzero((group == spec.k) & held_out)
         if val.size == 0:
             raise DataError(f"window k={spec.k} has no validation trial (trial_meta 'validate')")
         fit_f = validate(e_full, signals, int(val[0]), int(n))
         fit_r = validate(e_red, signals, int(val[0]), int(n))
-        entry = {"k": spec.k, "T_k_s": spec.t_k_s, "t_obs_s": spec.t_obs_s, "extension": spec.extension,
-                 "n_trials_identify": int(masks[len(windows)].sum())}
-        entry.update(_entry(e_full, truth, fit_f, reduced=False) if truth else {})
+        entry = {
+            "k": spec.k,
+            "T_k_s": spec.t_k_s,
+            "t_obs_s": spec.t_obs_s,
+            "extension": spec.extension,
+            "n_trials_identify": int(masks[len(windows)].sum()),
+        }
+        entry.update(_entry(e_full, truth, fit_f, reduced=False))
         if truth:
             entry.update({"K_true": truth["K"], "D_true": truth["D"], "xi_true": truth["xi"]})
-            entry["reduced"] = _entry(e_red, truth, fit_r, reduced=True)
-            entry["reduced"]["xi_known"] = xi_known.tolist()
+        entry["reduced"] = _entry(e_red, truth, fit_r, reduced=True)
+        entry["reduced"]["xi_known"] = xi_known.tolist()
         windows.append(entry)
         if not spec.extension:
-            series = {"t_s": fit_f.t, "dtau_measured": fit_f.dtau, "dtau_full": fit_f.dtau_hat,
-                      "dtau_reduced": fit_r.dtau_hat, "t_obs_s": spec.t_obs_s}
+            series = {
+                "t_s": fit_f.t,
+                "dtau_measured": fit_f.dtau,
+                "dtau_full": fit_f.dtau_hat,
+                "dtau_reduced": fit_r.dtau_hat,
+                "t_obs_s": spec.t_obs_s,
+            }
     t_obs = np.array([s.t_obs_s for s in specs])
     results = {
         "protocol": trials.attrs.get("protocol", "conditioning_window"),
         "seed": trials.attrs.get("seed"),
         "ground_truth": truth,
         "paper": dict(PAPER_THRESHOLDS_S),
-        "criteria": {"full": _criteria(t_obs, full, estimator), "reduced": _criteria(t_obs, reduced, estimator)},
+        "criteria": {
+            "full": _criteria(t_obs, full, estimator),
+            "reduced": _criteria(t_obs, reduced, estimator),
+        },
         "windows": windows,
     }
     return results, series

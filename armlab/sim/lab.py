@@ -79,7 +79,9 @@ def robot_targets(
     return out
 
 
-def record_trials(cfg: ExperimentConfig, scenario: Scenario, plan: TrialPlan, rng: np.random.Generator) -> LabRecording:
+def record_trials(
+    cfg: ExperimentConfig, scenario: Scenario, plan: TrialPlan, rng: np.random.Generator
+) -> LabRecording:
     """Simulate and record every trial of ``plan``.
 
     Args:
@@ -138,9 +140,17 @@ def record_trials(cfg: ExperimentConfig, scenario: Scenario, plan: TrialPlan, rn
         ),
     }
     units = {
-        "hand_pos": "m", "hand_force": "N", "robot_q": "rad", "robot_tau": "N*m", "ft_force": "N",
-        "ft_torque": "N*m", "true_arm_q": "rad", "true_hand_pos": "m", "true_activation": "1",
-        "true_arm_points": "m", "true_robot_points": "m",
+        "hand_pos": "m",
+        "hand_force": "N",
+        "robot_q": "rad",
+        "robot_tau": "N*m",
+        "ft_force": "N",
+        "ft_torque": "N*m",
+        "true_arm_q": "rad",
+        "true_hand_pos": "m",
+        "true_activation": "1",
+        "true_arm_points": "m",
+        "true_robot_points": "m",
     }
     trials = TrialSet(
         fs_hz=fs,
@@ -148,12 +158,19 @@ def record_trials(cfg: ExperimentConfig, scenario: Scenario, plan: TrialPlan, rn
         channels=channels,
         units=units,
         trial_meta={
-            "group": plan.group, "direction": plan.direction, "T_k_s": plan.t_k_s,
-            "wait_s": plan.wait_s, "validate": plan.validate,
+            "group": plan.group,
+            "direction": plan.direction,
+            "T_k_s": plan.t_k_s,
+            "wait_s": plan.wait_s,
+            "validate": plan.validate,
         },
         attrs={
-            "protocol": cfg.protocol_name, "seed": cfg.seed, "arm_l1_m": scene.l1, "arm_l2_m": scene.l2,
-            "muscles": list(MUSCLES), "ground_truth": truth.as_dict(),
+            "protocol": cfg.protocol_name,
+            "seed": cfg.seed,
+            "arm_l1_m": scene.l1,
+            "arm_l2_m": scene.l2,
+            "muscles": list(MUSCLES),
+            "ground_truth": truth.as_dict(),
         },
     )
     return LabRecording(trials=trials, truth=truth, scene=scene, hold=hold)

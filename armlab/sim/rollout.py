@@ -51,7 +51,12 @@ class SimResult:
 
 
 def _reflex_command(
-    base: np.ndarray, length: np.ndarray, velocity: np.ndarray, ref: np.ndarray, cfg: ReflexConfig, lags: tuple[int, int]
+    base: np.ndarray,
+    length: np.ndarray,
+    velocity: np.ndarray,
+    ref: np.ndarray,
+    cfg: ReflexConfig,
+    lags: tuple[int, int],
 ) -> np.ndarray:
     """Muscle commands from delayed stretch (arrays already indexed at t - latency).
 
@@ -104,8 +109,12 @@ def simulate(
     else:
         lag_s = lag_sp = 0
         chunk = _CHUNK_NO_REFLEX
-    len_sl = np.r_[tuple(np.arange(scene.sensors[f"len_{m}"].start, scene.sensors[f"len_{m}"].stop) for m in MUSCLES)]
-    vel_sl = np.r_[tuple(np.arange(scene.sensors[f"vel_{m}"].start, scene.sensors[f"vel_{m}"].stop) for m in MUSCLES)]
+    len_sl = np.r_[
+        tuple(np.arange(scene.sensors[f"len_{m}"].start, scene.sensors[f"len_{m}"].stop) for m in MUSCLES)
+    ]
+    vel_sl = np.r_[
+        tuple(np.arange(scene.sensors[f"vel_{m}"].start, scene.sensors[f"vel_{m}"].stop) for m in MUSCLES)
+    ]
 
     data = [mujoco.MjData(model) for _ in range(nthread or 2)]
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
@@ -168,6 +177,9 @@ def simulate(
             muscle_ctrl[:, sample[ok]] = np.asarray(u)[:, keep][:, ok]
             qpos[:, sample[ok]] = states[:, keep][:, ok][..., 1 : 1 + model.nq]
     return SimResult(
-        sensordata=sensordata, activation=activation, muscle_ctrl=muscle_ctrl, qpos=qpos,
+        sensordata=sensordata,
+        activation=activation,
+        muscle_ctrl=muscle_ctrl,
+        qpos=qpos,
         fs_hz=1.0 / (dt * substeps),
     )

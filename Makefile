@@ -1,0 +1,35 @@
+# armlab — two commands on a fresh machine: `make run` and `make test` (see README.md).
+PY ?= python3
+VENV := .venv
+BIN := $(VENV)/bin
+STAMP := $(VENV)/.installed
+
+.PHONY: setup run test test-all bench lint clean-venv
+
+$(STAMP): pyproject.toml
+	$(PY) -m venv $(VENV)
+	$(BIN)/python -m pip install --quiet --upgrade pip
+	$(BIN)/python -m pip install --quiet -e ".[dev]"
+	touch $(STAMP)
+
+setup: $(STAMP)
+
+# install, run the default protocol (conditioning_window) and print its window sweep
+run: $(STAMP)
+	$(BIN)/armlab run protocol=conditioning_window
+
+test: $(STAMP)
+	$(BIN)/python -m pytest -q
+
+test-all: $(STAMP)
+	$(BIN)/python -m pytest -q -m "slow or not slow"
+
+bench: $(STAMP)
+	$(BIN)/python benchmarks/bench_protocol.py
+
+lint: $(STAMP)
+	$(BIN)/ruff check armlab tests benchmarks
+	$(BIN)/ruff format --check armlab tests benchmarks
+
+clean-venv:
+	rm -rf $(VENV)

@@ -1,0 +1,164 @@
+"""``armlab`` command line: run protocols (Hydra), re-estimate saved trials, view recordings.
+
+    armlab run [protocol=<name>] [Hydra overrides ...]   simulate + estimate, outputs in the run dir
+    armlab run --multirun seed=0,1,2 ...                 sweep through Hydra's launcher
+    armlab estimate <run_dir> [estimator.<field>=<v>]    re-run estimation on saved trials.h5
+    armlab view <run_dir>                                open the run's rerun recording
+
+Bad input is reported on one line (``armlab: error: ...``, exit status 2), never as a traceback.
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+from armlab.errors import ArmlabError, ConfigError
+
+__all__ = ["main"]
+
+GROUPS = ("protocol", "arm", "robot", "sensors", "scenario", "estimator")
+VERBS = ("run", "estimate", "view")
+
+
+def _fail(msg: str) -> int:
+    print(f"armlab: error: {msg}", file=sys.stderr)
+    return 2
+
+
+def _usage() -> str:
+    from armlab.config.store import available_options
+
+    protocols = ", ".join(available_options("protocol"))
+    return (
+        "usage: armlab <verb> [args]\n\n"
+        "verbs:\n"
+        "  run [--multirun] [protocol=<name>] [overrides]  simulate a protocol and estimate impedance\n"
+        "  estimate <run_dir> [estimator.<field>=<value>]  re-run estimation on a run's trials.h5\n"
+        "  view <run_dir>                                  open the run's rerun recording (trials.rrd)\n\n"
+        f"protocols: {protocols}\n"
+        "config groups: " + ", ".join(f"{g}=<{'|'.join(available_options(g))}>" for g in GROUPS) + "\n"
+        "examples:\n"
+        "  armlab run protocol=conditioning_window seed=3 arm=planar_linear reflex.enabled=false\n"
+        "  armlab run --multirun seed=0,1,2 hydra/launcher=joblib\n"
+    )
+
+
+def compose(overrides: list[str]):
+    """Compose and validate the experiment config (one-line errors for every bad override)."""
+    from hydra import compose as hydra_compose
+    from hydra import initialize_config_dir
+    from hydra.errors import HydraException
+    from omegaconf.errors import OmegaConfBaseException
+
+    from armlab.config.store import CONFIG_DIR, available_options, register_configs, to_experiment
+
+    for item in overrides:
+        key, sep, value = item.partition("=")
+        if sep and key in GROUPS and value not in available_options(key):
+            raise ConfigError(f"unknown {key} {value!r}; valid: {available_options(key)}")
+    register_configs()
+    try:
+        with initialize_config_dir(config_dir=str(CONFIG_DIR), version_base="1.3"):
+            cfg = hydra_compose(
+                config_name="config", overrides=[o for o in overrides if not o.startswith("hydra")]
+            )
+    except (HydraException, OmegaConfBaseException) as exc:
+        raise ConfigError(str(exc).strip().splitlines()[0]) from None
+    return cfg, to_experiment(cfg)
+
+
+def _hydra_task(cfg) -> None:
+    from hydra.core.hydra_config import HydraConfig
+    from omegaconf import OmegaConf
+
+    from armlab.config.store import to_experiment
+    from armlab.protocols.runner import format_table, run_protocol
+
+    exp = to_experiment(cfg)
+    out_dir = Path(HydraConfig.get().runtime.output_dir)
+    results = run_protocol(exp, out_dir, OmegaConf.to_yaml(cfg))
+    if exp.output.print_table:
+        print(format_table(results))
+    print(f"outputs: {out_dir}")
+
+
+def _run(args: list[str]) -> int:
+    import hydra
+
+    from armlab.config.store import CONFIG_DIR, register_configs
+
+    multirun = "--multirun" in args or "-m" in args
+    overrides = [a for a in args if a not in ("--multirun", "-m")]
+    bad = [a for a in overrides if a.startswith("-")]
+    if bad:
+        return _fail(f"unknown option(s) {bad}; valid: --multirun (or -m) and key=value overrides")
+    if not multirun:
+        compose(overrides)  # validates everything up front: one-line errors
+    else:
+        compose([o.split(",")[0] if "=" in o else o for o in overrides])
+    register_configs()
+
+    def task(cfg) -> None:
+        try:
+            _hydra_task(cfg)
+        except ArmlabError as exc:
+            print(f"armlab: error: {exc}", file=sys.stderr)
+            raise SystemExit(2) from None
+
+    wrapped = hydra.main(config_path=str(CONFIG_DIR), config_name="config", version_base="1.3")(task)
+    argv = sys.argv
+    sys.argv = ["armlab"] + (["--multirun"] if multirun else []) + overrides
+    try:
+        wrapped()
+    finally:
+        sys.argv = argv
+    return 0
+
+
+def _estimate(args: list[str]) -> int:
+    from armlab.protocols.runner import format_table, reestimate
+
+    if not args:
+        return _fail("estimate needs a run directory: armlab estimate <run_dir> [estimator.<field>=<value>]")
+    out, results = reestimate(Path(args[0]), args[1:])
+    print(format_table(results))
+    print(f"outputs: {out}")
+    return 0
+
+
+def _view(args: list[str]) -> int:
+    import shutil
+
+    from armlab.viz import view_command
+
+    if len(args) != 1:
+        return _fail("view needs exactly one run directory: armlab view <run_dir>")
+    rrd = Path(args[0]) / "trials.rrd"
+    if not rrd.is_file():
+        return _fail(f"{rrd} not found; give a run directory made by `armlab run` with output.recording=true")
+    cmd = view_command(rrd)
+    exe = shutil.which(cmd[0]) or str(Path(sys.executable).with_name(cmd[0]))
+    if not Path(exe).exists():
+        return _fail("the rerun viewer is not installed (pip install rerun-sdk)")
+    return subprocess.call([exe, *cmd[1:]])
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = sys.argv[1:] if argv is None else list(argv)
+    if not args or args[0] in ("-h", "--help", "help"):
+        print(_usage())
+        return 0
+    verb, rest = args[0], args[1:]
+    handlers = {"run": _run, "estimate": _estimate, "view": _view}
+    if verb not in handlers:
+        return _fail(f"unknown verb {verb!r}; valid: {list(VERBS)} (see armlab --help)")
+    try:
+        return handlers[verb](rest)
+    except ArmlabError as exc:
+        return _fail(str(exc))
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -1,0 +1,195 @@
+"""Run a protocol end to end and write its outputs — the edge where files and figures happen.
+
+Outputs in the run directory (never overwritten: a directory that already holds results is
+refused):
+``results.json`` (docs/results_schema.md), ``trials.h5`` (docs/trial_format.md), ``scene.xml``
+(the composed MJCF), ``fig4_full.png``, ``fig5_reduced.png``, ``fig6_validation.png``,
+``errors.png`` and ``trials.rrd`` (rerun recording of every trial).
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from datetime import datetime
+from pathlib import Path
+
+import numpy as np
+from omegaconf import OmegaConf
+
+from armlab.config.schema import EstimatorConfig, ExperimentConfig
+from armlab.data.h5io import read_trials, write_trials
+from armlab.data.trial import TrialSet
+from armlab.errors import ConfigError, DataError
+from armlab.perturbations.scenario import load_scenario
+from armlab.protocols.conditioning_window import estimate_protocol, simulate_protocol, window_specs
+
+__all__ = [
+    "PROTOCOLS",
+    "format_table",
+    "reestimate",
+    "run_protocol",
+]
+
+PROTOCOLS = ("conditioning_window",)
+
+
+def _json_default(obj):
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, np.generic):
+        return obj.item()
+    raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
+
+
+def _write_json(path: Path, data: dict) -> None:
+    if path.exists():
+        raise DataError(f"{path} exists; armlab never overwrites results — use a new run directory")
+    path.write_text(json.dumps(data, indent=2, default=_json_default))
+
+
+def _write_outputs(
+    out_dir: Path, trials: TrialSet, results: dict, series: dict, cfg: ExperimentConfig
+) -> dict:
+    from armlab import viz  # the only place figures and recordings are made
+
+    written = {}
+    if cfg.output.figures:
+        written["fig4"] = viz.plot_window_sweep(results, out_dir / "fig4_full.png", model="full")
+        written["fig5"] = viz.plot_window_sweep(results, out_dir / "fig5_reduced.png", model="reduced")
+        written["fig6"] = viz.plot_validation(series, out_dir / "fig6_validation.png")
+        written["errors"] = viz.plot_error_vs_window(results, out_dir / "errors.png")
+    if cfg.output.recording:
+        written["recording"] = viz.write_recording(out_dir / "trials.rrd", trials, results)
+    return {k: str(v) for k, v in written.items()}
+
+
+def run_protocol(cfg: ExperimentConfig, out_dir: Path, config_yaml: str = "") -> dict:
+    """Simulate, estimate and write every output of one protocol run.
+
+    Args:
+        cfg: the validated experiment configuration.
+        out_dir: the run directory (Hydra's); must not already contain results.
+        config_yaml: the composed config, stored with the trials for re-estimation.
+
+    Returns:
+        The results dict (also written to ``results.json``).
+    """
+    if cfg.protocol_name not in PROTOCOLS:
+        raise ConfigError(f"unknown protocol {cfg.protocol_name!r}; valid: {list(PROTOCOLS)}")
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    if (out_dir / "results.json").exists():
+        raise DataError(f"{out_dir} already holds results.json; armlab never overwrites a run")
+    timing = {}
+    t0 = time.perf_counter()
+    rec, scenario = simulate_protocol(cfg)
+    timing["simulate_s"] = time.perf_counter() - t0
+    trials = TrialSet(
+        fs_hz=rec.trials.fs_hz,
+        onset_index=rec.trials.onset_index,
+        channels=rec.trials.channels,
+        units=rec.trials.units,
+        trial_meta=rec.trials.trial_meta,
+        attrs={**rec.trials.attrs, "config_yaml": config_yaml, "scenario": scenario.name},
+    )
+    t1 = time.perf_counter()
+    specs = window_specs(scenario, cfg.estimator)
+    results, series = estimate_protocol(trials, cfg.estimator, specs)
+    timing["estimate_s"] = time.perf_counter() - t1
+    simulated_s = trials.n_trials * trials.n_samples / trials.fs_hz
+    results["simulated_s"] = simulated_s
+    t2 = time.perf_counter()
+    if cfg.output.trials:  # drawing aids (body points) stay out of the trial file
+        saved = {k: v for k, v in trials.channels.items() if not k.endswith("_points")}
+        write_trials(
+            out_dir / "trials.h5",
+            TrialSet(
+                fs_hz=trials.fs_hz,
+                onset_index=trials.onset_index,
+                channels=saved,
+                units={k: trials.units[k] for k in saved},
+                trial_meta=trials.trial_meta,
+                attrs=trials.attrs,
+            ),
+        )
+    (out_dir / "scene.xml").write_text(rec.scene.xml)
+    results["files"] = _write_outputs(out_dir, trials, results, series, cfg)
+    timing["outputs_s"] = time.perf_counter() - t2
+    timing["total_s"] = time.perf_counter() - t0
+    results["timing"] = timing
+    _write_json(out_dir / "results.json", results)
+    return results
+
+
+def reestimate(run_dir: Path, overrides: list[str] | None = None) -> tuple[Path, dict]:
+    """Re-run the estimation on a run's saved ``trials.h5`` without simulating again.
+
+    The estimator settings come from the run's stored config, updated by ``overrides`` of the form
+    ``estimator.<field>=<value>``. Results go to a new ``reestimate_<timestamp>/`` directory
+    inside the run directory.
+    """
+    run_dir = Path(run_dir)
+    path = run_dir / "trials.h5"
+    if not path.is_file():
+        raise DataError(f"{run_dir} has no trials.h5; give a run directory made by `armlab run`")
+    trials = read_trials(path)
+    stored = OmegaConf.create(trials.attrs.get("config_yaml") or "{}")
+    est_cfg = OmegaConf.merge(OmegaConf.structured(EstimatorConfig), stored.get("estimator", {}))
+    for item in overrides or []:
+        key, sep, value = item.partition("=")
+        if not sep or not key.startswith("estimator."):
+            raise ConfigError(f"override {item!r} must look like estimator.<field>=<value>")
+        field = key.split(".", 1)[1]
+        if field not in est_cfg:
+            raise ConfigError(f"unknown estimator field {field!r}; valid: {sorted(est_cfg.keys())}")
+        est_cfg[field] = OmegaConf.create({"v": value})["v"] if value != "null" else None
+    estimator = OmegaConf.to_object(est_cfg)
+    scenario_name = str(trials.attrs.get("scenario", "conditioning_window"))
+    scenario = load_scenario(scenario_name)
+    groups = sorted(set(np.asarray(trials.trial_meta["group"]).tolist()))
+    scenario = scenario.subset(k_values=groups, n_trials=None)
+    results, series = estimate_protocol(trials, estimator, window_specs(scenario, estimator))
+    out = run_dir / f"reestimate_{datetime.now():%Y-%m-%d_%H-%M-%S-%f}"
+    out.mkdir()
+    _write_json(out / "results.json", results)
+    return out, results
+
+
+def _fmt(x) -> str:
+    return "  -  " if x is None else f"{x * 1000:.0f} ms"
+
+
+def format_table(results: dict) -> str:
+    """The window sweep as a text table (printed at the end of ``make run``)."""
+    lines = [
+        "T_obs  k  ext |   cond  |  eig(K_s)       | K err  D err  xi err | reduced K err  D err | VAF1  VAF2",
+    ]
+    for w in results["windows"]:
+        red = w.get("reduced", {})
+        lines.append(
+            f"{w['t_obs_s'] * 1000:4.0f}ms {w['k']:2d}  {'*' if w['extension'] else ' '}  | {w.get('cond', float('nan')):7.0f} | "
+            f"{w['eig_Ks'][0]:6.2f} {w['eig_Ks'][1]:6.2f}  | {w.get('K_rel_err', float('nan')) * 100:5.1f}% "
+            f"{w.get('D_rel_err', float('nan')) * 100:5.1f}% {w.get('xi_rel_err', float('nan')) * 100:5.1f}% | "
+            f"{red.get('K_rel_err', float('nan')) * 100:11.1f}%  {red.get('D_rel_err', float('nan')) * 100:5.1f}% | "
+            f"{w['validation']['vaf_pct'][0]:4.0f}% {w['validation']['vaf_pct'][1]:4.0f}%"
+        )
+    for model in ("full", "reduced"):
+        c = results["criteria"][model]
+        lines.append(
+            f"{model:8s} criteria first met: K pos. def. {_fmt(c['K_pd_from_s'])}, quasi-symmetric "
+            f"{_fmt(c['symmetric_from_s'])}, quasi-constant {_fmt(c['constant_from_s'])}"
+        )
+    p = results["paper"]
+    lines.append(
+        f"paper (seeds/000 IV-D): K pos. def. > {p['K_pd_after_s'] * 1000:.0f} ms, quasi-symmetric > "
+        f"{p['symmetric_after_s'] * 1000:.0f} ms, quasi-constant > {p['constant_after_s'] * 1000:.0f} ms"
+    )
+    if "timing" in results:
+        t = results["timing"]
+        lines.append(
+            f"simulated {results['simulated_s']:.0f} s in {t['simulate_s']:.1f} s "
+            f"({results['simulated_s'] / t['simulate_s']:.0f}x real time); estimation {t['estimate_s']:.2f} s; "
+            f"outputs {t['outputs_s']:.1f} s; total {t['total_s']:.1f} s"
+        )
+    return "\n".join(lines)

@@ -1,0 +1,31 @@
+"""Simulation: the held posture, robot IK, batched rollout with reflexes, the simulated lab."""
+
+from armlab.sim.hold import (
+    HoldState,
+    preload_activations,
+    settle,
+)
+from armlab.sim.lab import (
+    LabRecording,
+    record_trials,
+    robot_targets,
+)
+from armlab.sim.robot_ik import (
+    solve_ik,
+)
+from armlab.sim.rollout import (
+    SimResult,
+    simulate,
+)
+
+__all__ = [
+    "HoldState",
+    "LabRecording",
+    "SimResult",
+    "preload_activations",
+    "record_trials",
+    "robot_targets",
+    "settle",
+    "simulate",
+    "solve_ik",
+]

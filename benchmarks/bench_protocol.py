@@ -1,0 +1,87 @@
+"""Benchmark of the conditioning-window protocol (issue 2 targets; run by `make bench`).
+
+Reports: wall time of the full protocol (780 trials, 29 windows, all outputs; target < 30 s on a
+2-core machine), simulated seconds per wall second against a bare ``mujoco.rollout`` of the same
+scene and control length (the engine's limit), and the time of estimating all windows against the
+longest single window (target <= 2x).
+"""
+
+from __future__ import annotations
+
+import tempfile
+import time
+from pathlib import Path
+
+import mujoco
+import numpy as np
+from mujoco import rollout
+
+from armlab.config.schema import ExperimentConfig
+from armlab.estimation.joint_ls import estimate, estimate_windows
+from armlab.estimation.processing import ProcessingConfig, joint_signals
+from armlab.models.scene import build_scene
+from armlab.protocols.runner import run_protocol
+from armlab.sim.hold import settle
+
+
+def main() -> None:
+    cfg = ExperimentConfig()
+    with tempfile.TemporaryDirectory() as tmp:
+        t0 = time.perf_counter()
+        res = run_protocol(cfg, Path(tmp) / "run")
+        wall = time.perf_counter() - t0
+    tim = res["timing"]
+    sim_s = res["simulated_s"]
+    print(
+        f"full protocol: {wall:.1f} s wall (target < 30 s); simulate {tim['simulate_s']:.1f} s, "
+        f"estimate {tim['estimate_s']:.2f} s, outputs {tim['outputs_s']:.1f} s"
+    )
+    print(f"simulation: {sim_s / tim['simulate_s']:.1f} simulated s per wall s")
+
+    scene = build_scene(cfg.arm, cfg.cuff, cfg.robot, cfg.sim)
+    hold = settle(scene, cfg.arm, cfg.sim.settle_s)
+    nstep = int(round(sim_s / 780 / scene.model.opt.timestep))
+    ctrl = np.broadcast_to(hold.ctrl, (780, nstep, scene.model.nu))
+    data = [mujoco.MjData(scene.model) for _ in range(2)]
+    t1 = time.perf_counter()
+    rollout.rollout(scene.model, data, np.tile(hold.state, (780, 1)), ctrl)
+    bare = time.perf_counter() - t1
+    print(
+        f"bare mujoco.rollout of the same scene and length: {bare:.1f} s "
+        f"-> armlab simulation at {bare / tim['simulate_s']:.2f} of the engine's limit"
+    )
+
+    from armlab.protocols.conditioning_window import simulate_protocol, window_specs
+
+    rec, scenario = simulate_protocol(cfg)
+    tr = rec.trials
+    sig = joint_signals(
+        tr.channel("hand_pos"),
+        tr.channel("hand_force"),
+        tr.fs_hz,
+        tr.onset_index,
+        tr.attrs["arm_l1_m"],
+        tr.attrs["arm_l2_m"],
+        ProcessingConfig(lowpass_hz=20.0),
+    )
+    specs = window_specs(scenario, cfg.estimator)
+    group, val = tr.trial_meta["group"], tr.trial_meta["validate"]
+    masks = np.stack([(group == s.k) & ~val for s in specs])
+    wins = np.array([int(round(s.t_obs_s * tr.fs_hz)) for s in specs])
+    reps = 20
+    t2 = time.perf_counter()
+    for _ in range(reps):
+        estimate_windows(sig, masks, wins)
+    all_w = (time.perf_counter() - t2) / reps
+    t3 = time.perf_counter()
+    for _ in range(reps):
+        estimate(sig, masks[-1], int(wins[-1]))
+    one = (time.perf_counter() - t3) / reps
+    print(
+        f"estimation: all {len(specs)} windows {all_w * 1e3:.1f} ms, longest single window {one * 1e3:.1f} ms "
+        f"-> ratio {all_w / one:.1f} (target <= 2)"
+    )
+
+
+if __name__ == "__main__":
+    main()

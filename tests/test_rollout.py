@@ -1,0 +1,94 @@
+"""Tests for armlab.sim.rollout.simulate: a still hold, determinism and the reflex delay."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import make_lab
+from numpy.testing import assert_array_equal
+
+from armlab.config.schema import ReflexConfig, SimConfig
+from armlab.sim.rollout import simulate
+
+SUBSTEPS = 2  # SimConfig() timestep 0.5 ms -> 1 kHz samples
+DT = SimConfig().timestep_s
+N_STEPS = round(0.2 / DT)  # 0.2 s per rollout
+
+
+@pytest.fixture(scope="module")
+def lab():
+    return make_lab("hill", False)
+
+
+def _hold_targets(lab, n_trials: int) -> np.ndarray:
+    return np.tile(lab.hold.ctrl[lab.scene.robot_act], (n_trials, N_STEPS, 1))
+
+
+def _ramped_targets(lab) -> np.ndarray:
+    """Two trials whose robot targets start moving at step 0: joints 1 and 2 by 2 t^2 rad (smooth)."""
+    t = np.arange(N_STEPS) * DT
+    targets = _hold_targets(lab, 2)
+    targets[0, :, 0] += 2.0 * t**2
+    targets[1, :, 1] -= 2.0 * t**2
+    return targets
+
+
+def test_constant_targets_hold_still(lab):
+    res = simulate(
+        lab.scene,
+        lab.hold.state,
+        _hold_targets(lab, 2),
+        lab.hold.activation,
+        ReflexConfig(enabled=False),
+        substeps=SUBSTEPS,
+    )
+    assert res.qpos.shape == (2, N_STEPS // SUBSTEPS, lab.scene.model.nq)
+    assert res.fs_hz == pytest.approx(1000.0)
+    q = res.qpos[..., lab.scene.arm_qpos]
+    # the hold was settled for 1 s: residual drift is ~1e-13 rad; 1e-6 rad catches any real motion
+    assert np.max(np.abs(q - lab.hold.q_arm)) < 1e-6
+    assert_array_equal(res.muscle_ctrl, np.broadcast_to(lab.hold.activation, res.muscle_ctrl.shape))
+
+
+def test_same_inputs_give_identical_outputs(lab):
+    args = (lab.scene, lab.hold.state, _ramped_targets(lab), lab.hold.activation, ReflexConfig())
+    a = simulate(*args, substeps=SUBSTEPS)
+    b = simulate(*args, substeps=SUBSTEPS)
+    assert_array_equal(a.sensordata, b.sensordata)
+    assert_array_equal(a.muscle_ctrl, b.muscle_ctrl)
+    assert np.all(np.isfinite(a.sensordata))
+
+
+def test_reflex_acts_only_after_its_latency(lab):
+    reflex = ReflexConfig()
+    base = lab.hold.activation
+    res = simulate(lab.scene, lab.hold.state, _ramped_targets(lab), base, reflex, substeps=SUBSTEPS)
+    # sample n holds the command of physics step SUBSTEPS * n + SUBSTEPS - 1 (its last step)
+    step = SUBSTEPS * np.arange(res.muscle_ctrl.shape[1]) + SUBSTEPS - 1
+    t = step * DT
+    before = t < reflex.stretch_latency_s
+    assert before.any() and (~before).any()
+    # motion starts at step 0: no stretch can have reached the commands before the latency
+    assert_array_equal(res.muscle_ctrl[:, before], np.broadcast_to(base, res.muscle_ctrl[:, before].shape))
+    # after it, the stretched muscles get more activation. The t^2 ramp starts gently: 5 ms past the
+    # latency the command has risen by ~1e-6 (2 t^2 -> cubic onset of stretch), while the settled
+    # hold's numerical drift alone moves it by ~1e-12, so 1e-8 separates response from drift.
+    window = (t >= reflex.stretch_latency_s) & (t < reflex.stretch_latency_s + 0.005)
+    dev = res.muscle_ctrl[:, window] - base
+    assert np.all(dev >= 0)  # the reflex only adds activation (rectified stretch)
+    assert np.all(np.max(dev, axis=(1, 2)) > 1e-8), np.max(dev, axis=(1, 2))
+    # by the end of the 0.2 s rollout the reflex is a sizeable part of the command
+    assert np.all(np.max(res.muscle_ctrl - base, axis=(1, 2)) > 1e-3)
+    # the arm really moved in both trials
+    assert np.all(np.max(np.abs(res.qpos[..., lab.scene.arm_qpos] - lab.hold.q_arm), axis=(1, 2)) > 1e-3)
+
+
+def test_reflex_disabled_keeps_base_commands(lab):
+    base = lab.hold.activation
+    res = simulate(
+        lab.scene, lab.hold.state, _ramped_targets(lab), base, ReflexConfig(enabled=False), substeps=SUBSTEPS
+    )
+    assert_array_equal(res.muscle_ctrl, np.broadcast_to(base, res.muscle_ctrl.shape))
+    on = simulate(lab.scene, lab.hold.state, _ramped_targets(lab), base, ReflexConfig(), substeps=SUBSTEPS)
+    # the same perturbation with the reflex changes the motion (the reflex is not a no-op)
+    assert np.max(np.abs(on.qpos - res.qpos)) > 1e-6
