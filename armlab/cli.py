@@ -97,7 +97,8 @@ def _run(args: list[str]) -> int:
     if not multirun:
         compose(overrides)  # validates everything up front: one-line errors
     else:
-        compose([o.split(",")[0] if "=" in o else o for o in overrides])
+        # validate the first value of each sweep (a,b,c); lists [a,b] are values, not sweeps
+        compose([o if o.partition("=")[2].startswith(("[", "{")) else o.split(",")[0] for o in overrides])
     register_configs()
 
     def task(cfg) -> None:
