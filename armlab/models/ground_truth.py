@@ -4,9 +4,9 @@
   differences of the arm's actuator + passive joint forces with respect to the arm's joint
   positions and velocities, with muscle activations frozen (``mj_forward`` does not integrate
   ``act``). Reflexes are excluded by construction: they act through activation.
-- Base inertial parameters xi of eq. (13) of the conditioning paper from the body inertias, plus
-  the masses beyond the force sensor that move with the hand (the cuff shell, and the sensor's
-  tool side when the cuff is rigid), taken as point masses at the hand.
+- Base inertial parameters xi of eq. (13) of the conditioning paper from the body inertias of
+  the arm and the bodies welded to it (the cuff shell, with its own inertia), plus, for a rigid
+  cuff, the robot-side bodies beyond the force sensor as point masses at the hand.
 """
 
 from __future__ import annotations

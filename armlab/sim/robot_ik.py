@@ -35,12 +35,9 @@ def nominal_robot_posture(scene: Scene, target: np.ndarray) -> np.ndarray:
     Returns:
         (7,) rad joint angles.
     """
-    base = scene.model.body_pos[mujoco.mj_name2id(scene.model, mujoco.mjtObj.mjOBJ_BODY, "lwr/lwr_base")]
-    # robot_mount site offset is added by the attachment frame; use the link1 world pose instead
     data = mujoco.MjData(scene.model)
     mujoco.mj_kinematics(scene.model, data)
     link1 = data.xpos[mujoco.mj_name2id(scene.model, mujoco.mjtObj.mjOBJ_BODY, "lwr/lwr_link1")]
-    del base
     d = target - link1
     yaw = float(np.arctan2(d[1], d[0]))
     # j2 about -y leans forward for negative angles in the base's turned frame; start bent

@@ -56,13 +56,11 @@ def _reflex_command(
     velocity: np.ndarray,
     ref: np.ndarray,
     cfg: ReflexConfig,
-    lags: tuple[int, int],
 ) -> np.ndarray:
     """Muscle commands from delayed stretch (arrays already indexed at t - latency).
 
     ``length``/``velocity`` are (2, n_trials, n_steps, 6): [stretch-lagged, spinal-lagged].
     """
-    del lags
     stretch_s = (length[0] - ref) / REFLEX_LENGTH_SCALE_M
     rate_s = velocity[0] / REFLEX_LENGTH_SCALE_M
     stretch_sp = (length[1] - ref) / REFLEX_LENGTH_SCALE_M
@@ -135,7 +133,6 @@ def simulate(
     hist_vel = np.empty_like(hist_len)
 
     state = np.tile(initial_state, (n_trials, 1))
-    ctrl = np.zeros((n_trials, chunk, model.nu))
     with mj_rollout.Rollout(nthread=len(data)) as runner:
         for c0 in range(0, n_steps, chunk):
             c1 = min(n_steps, c0 + chunk)
@@ -158,7 +155,6 @@ def simulate(
                     np.stack([lagged[0][1], lagged[1][1]]),
                     ref_len,
                     reflex,
-                    (lag_s, lag_sp),
                 )
             else:
                 u = np.broadcast_to(muscle_base, (n_trials, m, len(MUSCLES)))
