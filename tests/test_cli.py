@@ -3,7 +3,12 @@
 from __future__ import annotations
 
 import importlib
+import json
+import subprocess
+import sys
+from pathlib import Path
 
+import numpy as np
 import pytest
 
 from armlab.cli import compose, main
@@ -79,3 +84,70 @@ def test_public_api_names_resolve(package):
     mod = importlib.import_module(package)
     for name in mod.__all__:
         assert hasattr(mod, name), f"{package}.{name}"
+
+
+# A small run: two windows (k = 1, 26), 7 trials each (6 identify, one per direction), no figures
+# or recording. Through the installed console script, as a user runs it.
+_SMALL = ["scenario.k_values=[1,26]", "scenario.n_trials=7", "output.recording=false", "output.figures=false"]
+
+
+def _armlab(*args: str, cwd: Path) -> subprocess.CompletedProcess:
+    exe = Path(sys.executable).with_name("armlab")
+    return subprocess.run([str(exe), *args], cwd=cwd, capture_output=True, text=True, timeout=300)
+
+
+@pytest.fixture(scope="module")
+def small_run(tmp_path_factory):
+    tmp = tmp_path_factory.mktemp("cli")
+    run_dir = tmp / "run"
+    proc = _armlab("run", *_SMALL, "seed=5", f"hydra.run.dir={run_dir}", cwd=tmp)
+    assert proc.returncode == 0, proc.stderr
+    return run_dir, proc
+
+
+def test_run_writes_results_trials_and_prints_the_table(small_run):
+    run_dir, proc = small_run
+    results = json.loads((run_dir / "results.json").read_text())
+    assert [w["t_obs_s"] for w in results["windows"]] == pytest.approx([0.12, 0.37, 0.40, 0.45, 0.50])
+    assert results["seed"] == 5 and (run_dir / "trials.h5").is_file()
+    assert "criteria first met" in proc.stdout and f"outputs: {run_dir}" in proc.stdout
+
+
+def test_estimate_reproduces_the_run_from_its_trial_file(small_run):
+    run_dir, _ = small_run
+    proc = _armlab("estimate", str(run_dir), cwd=run_dir)
+    assert proc.returncode == 0, proc.stderr
+    out = Path(proc.stdout.strip().splitlines()[-1].removeprefix("outputs: "))
+    assert out.parent == run_dir and out.name.startswith("reestimate_")
+    again = json.loads((out / "results.json").read_text())["windows"]
+    first = json.loads((run_dir / "results.json").read_text())["windows"]
+    # same trials, same estimator: the same numbers (float32-free trial file, same code path)
+    for a, b in zip(first, again, strict=True):
+        np.testing.assert_allclose(a["K"], b["K"], rtol=1e-9)
+        np.testing.assert_allclose(a["D"], b["D"], rtol=1e-9)
+    # an estimator override changes the estimate, and the original run is untouched
+    proc = _armlab("estimate", str(run_dir), "estimator.lowpass_hz=40", cwd=run_dir)
+    assert proc.returncode == 0, proc.stderr
+    out40 = Path(proc.stdout.strip().splitlines()[-1].removeprefix("outputs: "))
+    assert out40 != out
+    k40 = json.loads((out40 / "results.json").read_text())["windows"][-1]["K"]
+    assert not np.allclose(k40, first[-1]["K"], rtol=1e-6)
+    assert json.loads((run_dir / "results.json").read_text())["windows"] == first
+
+
+def test_estimate_rejects_unknown_estimator_field(small_run, capsys):
+    run_dir, _ = small_run
+    assert main(["estimate", str(run_dir), "estimator.nope=1"]) == 2
+    assert "unknown estimator field 'nope'" in capsys.readouterr().err
+
+
+def test_multirun_sweeps_seeds_into_separate_directories(tmp_path):
+    sweep = tmp_path / "sweep"
+    proc = _armlab("run", "--multirun", "seed=0,1", *_SMALL, f"hydra.sweep.dir={sweep}", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    runs = sorted(p for p in sweep.iterdir() if (p / "results.json").is_file())
+    assert [p.name for p in runs] == ["0", "1"]
+    seeds = [json.loads((p / "results.json").read_text())["seed"] for p in runs]
+    assert seeds == [0, 1]
+    k = [json.loads((p / "results.json").read_text())["windows"][-1]["K"] for p in runs]
+    assert not np.allclose(k[0], k[1])  # different seeds: different noise, different estimates

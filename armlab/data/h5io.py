@@ -190,6 +190,9 @@ def write_trials(path: str | os.PathLike[str], trials: TrialSet, overwrite: bool
     fd, tmp_name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
     os.close(fd)
     tmp = Path(tmp_name)
+    umask = os.umask(0)  # mkstemp makes the file private; give it the permissions of open()
+    os.umask(umask)
+    tmp.chmod(0o666 & ~umask)
     try:
         with h5py.File(tmp, "w") as f:
             f.attrs["format"] = FORMAT_NAME

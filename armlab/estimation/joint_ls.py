@@ -21,6 +21,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
 
 from armlab.errors import EstimationError
 from armlab.estimation.processing import JointSignals
@@ -89,6 +90,50 @@ def _fill_regressor(
     out[..., 0, o + 5] = dq[..., 1]
     out[..., 1, o + 6] = dq[..., 0]
     out[..., 1, o + 7] = dq[..., 1]
+
+
+# Signals of one sample from which both rows of Eq. (13) and of its reduced form are linear maps:
+# u = [qdd1, qdd2, qd1, qd2, dq1, dq2, a, b, dtau1, dtau2] with
+# a = (2 qdd1 + qdd2) cos q2 - (2 qd1 qd2 + qd2²) sin q2 and b = qdd1 cos q2 + qd1² sin q2.
+# Sums of u u^T (10 x 10) carry the normal equations of both models at a third of the cost of
+# forming the two (11 + 1)-column rows per sample.
+_N_BASIS = 10
+
+
+def _basis(signals: JointSignals, idx: np.ndarray, length: int) -> np.ndarray:
+    """The signal basis ``u`` over ``length`` samples after onset of trials ``idx``: (n, 10, length).
+
+    Component-major, so each trial's ``u u^T`` is one contiguous matrix product. The caller
+    checks that the window fits in the records.
+    """
+    on = signals.onset_index[idx]
+    q, qd, qdd, dq, dtau = (
+        sliding_window_view(a, length, axis=1)[idx, on]  # (n, 2, length) copies
+        for a in (signals.q, signals.qd, signals.qdd, signals.dq, signals.dtau)
+    )
+    s2, c2 = np.sin(q[:, 1]), np.cos(q[:, 1])
+    qd1, qd2, qdd1, qdd2 = qd[:, 0], qd[:, 1], qdd[:, 0], qdd[:, 1]
+    u = np.empty((idx.size, _N_BASIS, length))
+    u[:, 0:2] = qdd
+    u[:, 2:4] = qd
+    u[:, 4:6] = dq
+    u[:, 6] = (2 * qdd1 + qdd2) * c2 - (2 * qd1 + qd2) * qd2 * s2
+    u[:, 7] = qdd1 * c2 + qd1 * qd1 * s2
+    u[:, 8:10] = dtau
+    return u
+
+
+def _row_maps() -> np.ndarray:
+    """(2, 10, 12): ``[X | y]`` row r = ``u @ maps[r]``, columns of :data:`PARAM_NAMES` then y."""
+    m = np.zeros((2, _N_BASIS, 12))
+    for col, src in enumerate((0, 6, 1, 2, 3, None, None, 4, 5, None, None, 8)):  # row 0
+        if src is not None:
+            m[0, src, col] = 1.0
+    for col, src in enumerate((None, 7, 0, None, None, 2, 3, None, None, 4, 5, 9)):  # row 1
+        if src is not None:
+            m[1, src, col] = 1.0
+    m[1, 1, 2] = 1.0  # qdd1 + qdd2
+    return m
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -318,14 +363,15 @@ def estimate_windows(
     """Estimates for many observation windows at once (Sec. IV-C/IV-D of the conditioning paper).
 
     Window ``k`` uses the trials selected by ``trial_masks[k]`` (in the protocol, the trials whose
-    ``group == k``) over samples ``[onset, onset + window_samples[k])``. Each sample's regressor
-    rows are built once, however many windows contain it: the samples are cut into blocks between
-    consecutive distinct window lengths, each block's products ``Z^T Z`` of ``Z = [X | y]`` are
-    summed per trial in one batched call and added to every window that contains the block. So the
-    normal equations ``H = W^T W``, ``g = W^T y`` of all windows cost one pass over the data used by
-    any window, plus O(c²) per (trial, block); the Python loop runs over distinct window lengths
-    only. With nested windows (the same trials for all windows) all windows together cost about
-    one estimate of the longest window; with disjoint trial groups, one pass over all groups.
+    ``group == k``) over samples ``[onset, onset + window_samples[k])``. Both rows of ``[X | y]``
+    of a sample are linear maps of ten signals ``u`` (see :func:`_basis`), so the normal equations
+    ``H = W^T W``, ``g = W^T y`` of every window follow from sums of ``u u^T``. Each sample's ``u``
+    is built once, however many windows contain it: trials are grouped by the longest window that
+    uses them, each group's samples are cut into blocks between the window lengths that use it, and
+    each block's per-trial ``u u^T`` (one batched product) is added to every window containing it.
+    All windows thus cost one pass over the data used by any window; with nested windows (the same
+    trials for all windows) about one estimate of the longest window, with disjoint trial groups
+    (the paper's design) one pass over all groups.
 
     Each system is solved after Jacobi (column) scaling by an eigendecomposition; see the module
     docstring for the accuracy of this route. The residual sum of squares is ``y^T y - g^T zeta``,
@@ -361,21 +407,27 @@ def estimate_windows(
     for k in range(masks.shape[0]):
         _check_rows(2 * int(wins[k]) * int(masks[k].sum()), c, f"window {k}")
 
-    # Trials sorted by their longest window, so the trials active past any length form a prefix.
+    # Trials grouped by the longest window that uses them: each group's basis is computed once
+    # over that length and cut into blocks between the window lengths that use the group.
     longest = np.max(np.where(masks, wins[:, None], 0), axis=0)  # (n_trials,), 0 if unused
-    order = np.argsort(-longest, kind="stable")
-    order = order[longest[order] > 0]
-    n_active = np.sum(longest[order][:, None] >= np.unique(wins)[None, :], axis=0)
-    raw = _window(signals, order, 1, length=int(wins.max()))  # each (n_used, max window, 2)
-    weight = masks[:, order].astype(float)  # (n_windows, n_used)
-    G = np.zeros((wins.size, (c + 1) ** 2))
-    lo = 0
-    for hi, n_act in zip(np.unique(wins), n_active, strict=True):  # one batched product per length
-        Z = _augmented(*(a[:n_act, lo:hi] for a in raw), xi_known).reshape(n_act, -1, c + 1)
-        blocks = np.matmul(Z.transpose(0, 2, 1), Z).reshape(n_act, -1)  # per-trial Z^T Z
-        G += (weight[:, :n_act] * (wins >= hi)[:, None]) @ blocks
-        lo = int(hi)
-    G = G.reshape(-1, c + 1, c + 1)
+    weight = masks.astype(float)
+    S = np.zeros((wins.size, _N_BASIS * _N_BASIS))
+    for length in np.unique(longest[longest > 0]):
+        idx = np.flatnonzero(longest == length)
+        u = _basis(signals, idx, int(length))
+        lo = 0
+        for hi in np.unique(wins[masks[:, idx].any(axis=1)]):
+            ub = u[:, :, lo:hi]
+            blocks = np.matmul(ub, ub.transpose(0, 2, 1)).reshape(idx.size, -1)  # per-trial u u^T
+            S += (weight[:, idx] * (wins >= hi)[:, None]) @ blocks
+            lo = int(hi)
+    maps = _row_maps()
+    if xi_known is not None:  # Eqs. (24)-(25): keep the D, K columns, move the xi terms to y
+        maps = np.concatenate(
+            [maps[:, :, 3:11], maps[:, :, 11:] - maps[:, :, :3] @ xi_known[:, None]], axis=2
+        )
+    S = S.reshape(-1, _N_BASIS, _N_BASIS)
+    G = sum(maps[r].T @ S @ maps[r] for r in range(2))  # (n_windows, c + 1, c + 1) = [X | y]^T [X | y]
     H, g, yy = G[:, :c, :c], G[:, :c, c], G[:, c, c]
 
     diag = np.diagonal(H, axis1=1, axis2=2)

@@ -22,7 +22,12 @@ from armlab.data.h5io import read_trials, write_trials
 from armlab.data.trial import TrialSet
 from armlab.errors import ConfigError, DataError
 from armlab.perturbations.scenario import load_scenario
-from armlab.protocols.conditioning_window import estimate_protocol, simulate_protocol, window_specs
+from armlab.protocols.conditioning_window import (
+    estimate_protocol,
+    linearisation_bias,
+    simulate_protocol,
+    window_specs,
+)
 
 __all__ = [
     "PROTOCOLS",
@@ -96,6 +101,7 @@ def run_protocol(cfg: ExperimentConfig, out_dir: Path, config_yaml: str = "") ->
     t1 = time.perf_counter()
     specs = window_specs(scenario, cfg.estimator)
     results, series = estimate_protocol(trials, cfg.estimator, specs)
+    results["linearisation_bias"] = linearisation_bias(cfg)
     timing["estimate_s"] = time.perf_counter() - t1
     simulated_s = trials.n_trials * trials.n_samples / trials.fs_hz
     results["simulated_s"] = simulated_s
@@ -185,6 +191,13 @@ def format_table(results: dict) -> str:
         f"paper (seeds/000 IV-D): K pos. def. > {p['K_pd_after_s'] * 1000:.0f} ms, quasi-symmetric > "
         f"{p['symmetric_after_s'] * 1000:.0f} ms, quasi-constant > {p['constant_after_s'] * 1000:.0f} ms"
     )
+    if "linearisation_bias" in results:
+        b = results["linearisation_bias"]
+        lines.append(
+            f"linearisation bias ({b['muscle']} muscles, {b['conditions']}) at T_obs = "
+            f"{b['t_obs_s'] * 1000:.0f} ms: K {b['K_rel_err'] * 100:.2f} %, D {b['D_rel_err'] * 100:.2f} %, "
+            f"xi {b['xi_rel_err'] * 100:.2f} %"
+        )
     if "timing" in results:
         t = results["timing"]
         lines.append(
