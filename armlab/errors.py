@@ -12,6 +12,7 @@ __all__ = [
     "DataError",
     "ModelError",
     "EstimationError",
+    "SimulationError",
 ]
 
 
@@ -33,3 +34,7 @@ class ModelError(ArmlabError, ValueError):
 
 class EstimationError(ArmlabError, ValueError):
     """An estimation problem is ill-posed (too few samples, singular regressor, ...)."""
+
+
+class SimulationError(ArmlabError, RuntimeError):
+    """A simulated trial failed (safety range hit, instability); the message says when and why."""

@@ -128,10 +128,14 @@ def test_criteria_config_validation(kwargs, message):
 
 def test_public_api_resolves():
     import armlab.estimation as est
+    import armlab.estimation.arm_tf_models as tfm
     import armlab.estimation.criteria as crit
+    import armlab.estimation.frf as frf
     import armlab.estimation.joint_ls as ls
+    import armlab.estimation.levy as levy
     import armlab.estimation.processing as proc
 
-    for module in (est, crit, ls, proc):
+    modules = (crit, ls, proc, frf, levy, tfm)
+    for module in (est, *modules):
         assert all(hasattr(module, name) for name in module.__all__), module.__name__
-    assert set(crit.__all__) | set(ls.__all__) | set(proc.__all__) == set(est.__all__)
+    assert set().union(*(m.__all__ for m in modules)) == set(est.__all__)

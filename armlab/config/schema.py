@@ -15,6 +15,9 @@ from armlab.errors import ConfigError
 __all__ = [
     "ArmConfig",
     "CuffConfig",
+    "DirectDriveConfig",
+    "ElbowConfig",
+    "FrfConfig",
     "EstimatorConfig",
     "ExperimentConfig",
     "OutputConfig",
@@ -28,6 +31,7 @@ __all__ = [
 MUSCLE_VARIANTS = ("hill", "linear")
 SENSOR_PRESETS = ("realistic", "ideal")
 XI_SOURCES = ("truth", "paper")
+ELBOW_IMPEDANCES = ("muscle", "five_element", "fractional")
 
 
 def _check(cond: bool, msg: str) -> None:
@@ -212,6 +216,140 @@ class EstimatorConfig:
 
 
 @dataclass(kw_only=True)
+class ElbowConfig:
+    """The 1-DoF elbow grasping the direct-drive handle (fractional-elbow paper, seeds/004).
+
+    ``impedance`` picks the ground truth: ``muscle`` (Hill antagonist pair of
+    models/elbow_1dof, co-contraction and the optional reflex of :class:`ReflexConfig`),
+    ``five_element`` (linear arm spring/damper k2, d2 behind the grasp k1, d1, paper Sec. IV-B,
+    Eqs. (31)-(37), with M the model's forearm inertia) or ``fractional`` (spring k2 in parallel
+    with a fractional element ``c s^beta``, realised by an Oustaloup rational approximation).
+    Grasp values are translational at the handle and enter the model as ``k L^2``.
+    """
+
+    model: str = "elbow_1dof"
+    impedance: str = "muscle"
+    cocontraction: float = 0.5  # activation of both muscles; the paper's subjects co-contract
+    # Grasp of the hand on the handle (assumption, inside the range of the grasp elements of the
+    # five-element models of seeds/004 Table II read by Eqs. (32)-(37): k1 770-15000 N/m,
+    # d1 0.8-180 N s/m); puts the hand-on-grasp mode near 9 Hz, inside the 0.12-15 Hz band
+    grasp_stiffness_N_per_m: float = 2000.0
+    grasp_damping_Ns_per_m: float = 10.0
+    # five_element / fractional: the arm behind the grasp (assumption: elbow stiffness and damping
+    # under co-contraction, the range 20-100 N m/rad and 1-5 N m s/rad of elbow studies)
+    arm_stiffness_Nm_per_rad: float = 60.0
+    arm_damping_Nms_per_rad: float = 3.0
+    # fractional: c s^beta with beta in (0, 1) (a "springpot" between spring and damper)
+    fractional_order: float = 0.5
+    fractional_coeff: float = 8.0  # N m s^beta / rad (assumption, near the integer damper's effect)
+    oustaloup_band_hz: tuple[float, float] = (0.005, 200.0)  # Hz, approximation band (> 0.12-15 Hz)
+    oustaloup_order: int = 6  # pole-zero pairs per side, 2N + 1 in all
+
+    def __post_init__(self) -> None:
+        _choice("elbow.model", self.model, ("elbow_1dof",))
+        _choice("elbow.impedance", self.impedance, ELBOW_IMPEDANCES)
+        _check(
+            0.0 < self.cocontraction < 1.0,
+            f"elbow.cocontraction must lie in (0, 1), got {self.cocontraction}",
+        )
+        for name in ("grasp_stiffness_N_per_m", "arm_stiffness_Nm_per_rad", "fractional_coeff"):
+            value = getattr(self, name)
+            _check(value > 0, f"elbow.{name} must be > 0, got {value}")
+        for name in ("grasp_damping_Ns_per_m", "arm_damping_Nms_per_rad"):
+            value = getattr(self, name)
+            _check(value >= 0, f"elbow.{name} must be >= 0, got {value}")
+        _check(
+            0.0 < self.fractional_order < 1.0,
+            f"elbow.fractional_order must lie in (0, 1) (a springpot), got {self.fractional_order}",
+        )
+        lo, hi = self.oustaloup_band_hz
+        _check(
+            0 < lo < hi, f"elbow.oustaloup_band_hz must be (low, high) with 0 < low < high, got {(lo, hi)}"
+        )
+        _check(self.oustaloup_order >= 1, f"elbow.oustaloup_order must be >= 1, got {self.oustaloup_order}")
+
+
+@dataclass(kw_only=True)
+class DirectDriveConfig:
+    """The direct-drive motor's force controller (fractional-elbow paper, Fig. 3, Eqs. (19)-(21)).
+
+    The applied torque is ``tau = tau_Dym + L (F_ref + PID(F_ref - F_measured))`` with the
+    dynamic compensation ``tau_Dym = M_hat theta_dd + C_hat theta_d + B_hat sign(theta_d)``
+    (Eq. (21)); M_hat, C_hat, B_hat are the model's true values times ``1 + error``.
+    """
+
+    model: str = "direct_drive"
+    safety_range_rad: float = 0.9  # rad, motor range each way around zero (paper III-A)
+    # relative error of M_hat. The compensation reads the accelerometer one control period late,
+    # a positive feedback that is unstable for M_hat >= the true inertia; -0.2 keeps a margin
+    # (measured: tracking error 14 % at -0.2, divergence at 0).
+    inertia_error: float = -0.2
+    viscous_error: float = 0.0  # relative error of C_hat
+    coulomb_error: float = 0.0  # relative error of B_hat
+    # PID on the force error (assumption: tuned on the default elbow for a well-damped loop)
+    kp: float = 1.0
+    ki_per_s: float = 50.0
+    kd_s: float = 0.0
+    derivative_cutoff_hz: float = 40.0  # Hz, low-pass of the measured velocity/acceleration
+    sign_deadband_rad_s: float = 0.002  # rad/s, below which sign(theta_d) is taken as 0
+    current_bits: int = 16  # bits of the analog current reference (paper III-A: 16-bit input)
+
+    def __post_init__(self) -> None:
+        _choice("motor.model", self.model, ("direct_drive",))
+        _check(
+            0 < self.safety_range_rad <= 1.0,
+            "motor.safety_range_rad must lie in (0, 1.0] rad (mechanical stops at 1.0), "
+            f"got {self.safety_range_rad}",
+        )
+        for name in ("inertia_error", "viscous_error", "coulomb_error"):
+            value = getattr(self, name)
+            _check(
+                value >= -1.0,
+                f"motor.{name} must be >= -1 (a relative error; -1 drops the term), got {value}",
+            )
+        for name in ("kp", "ki_per_s", "kd_s", "sign_deadband_rad_s"):
+            value = getattr(self, name)
+            _check(value >= 0, f"motor.{name} must be >= 0, got {value}")
+        _check(
+            self.derivative_cutoff_hz > 0,
+            f"motor.derivative_cutoff_hz must be > 0, got {self.derivative_cutoff_hz}",
+        )
+        _check(
+            8 <= self.current_bits <= 24, f"motor.current_bits must lie in [8, 24], got {self.current_bits}"
+        )
+
+
+@dataclass(kw_only=True)
+class FrfConfig:
+    """Frequency-response estimation and Levy fits (fractional-elbow paper, Sec. II and III-B)."""
+
+    # zero-phase equiripple FIR on the angle: pass 15 Hz, stop 18 Hz, 1 dB ripple, 80 dB
+    fir_pass_hz: float = 15.0
+    fir_stop_hz: float = 18.0
+    fir_ripple_db: float = 1.0
+    fir_attenuation_db: float = 80.0
+    welch_window: int = 5000  # samples, Blackman-Harris windows
+    welch_overlap: float = 0.25
+    band_hz: tuple[float, float] = (0.12, 15.0)  # Hz, band of the fits
+    alpha_step: float = 0.1  # sweep of the commensurate order over (0, 2)
+    # The paper filters the angle only; its 1 dB equiripple pass band then ripples G by up to
+    # ~2 x 0.8 dB (forward + backward). True filters the force too, which cancels the ripple.
+    filter_force: bool = False
+
+    def __post_init__(self) -> None:
+        _check(
+            0 < self.fir_pass_hz < self.fir_stop_hz,
+            "frf.fir_pass_hz must be > 0 and below frf.fir_stop_hz, "
+            f"got {self.fir_pass_hz}, {self.fir_stop_hz}",
+        )
+        _check(self.welch_window >= 16, f"frf.welch_window must be >= 16 samples, got {self.welch_window}")
+        _check(0 <= self.welch_overlap < 1, f"frf.welch_overlap must lie in [0, 1), got {self.welch_overlap}")
+        lo, hi = self.band_hz
+        _check(0 <= lo < hi, f"frf.band_hz must be (low, high) with 0 <= low < high, got {(lo, hi)}")
+        _check(0 < self.alpha_step < 1, f"frf.alpha_step must lie in (0, 1), got {self.alpha_step}")
+
+
+@dataclass(kw_only=True)
 class OutputConfig:
     """What a run writes besides results.json."""
 
@@ -231,6 +369,9 @@ class ExperimentConfig:
     reflex: ReflexConfig = field(default_factory=ReflexConfig)
     cuff: CuffConfig = field(default_factory=CuffConfig)
     robot: RobotConfig = field(default_factory=RobotConfig)
+    elbow: ElbowConfig = field(default_factory=ElbowConfig)
+    motor: DirectDriveConfig = field(default_factory=DirectDriveConfig)
+    frf: FrfConfig = field(default_factory=FrfConfig)
     sim: SimConfig = field(default_factory=SimConfig)
     sensors: SensorsConfig = field(default_factory=SensorsConfig)
     scenario: ScenarioConfig = field(default_factory=ScenarioConfig)

@@ -6,6 +6,12 @@ from armlab.data.h5io import (
     read_trials,
     write_trials,
 )
+from armlab.data.reklab import (
+    DEFAULT_REKLAB_ROOT,
+    AnkleTrial,
+    list_ankle_trials,
+    load_ankle_trial,
+)
 from armlab.data.trial import TrialSet
 
 __all__ = [
@@ -14,4 +20,8 @@ __all__ = [
     "FORMAT_VERSION",
     "read_trials",
     "write_trials",
+    "DEFAULT_REKLAB_ROOT",
+    "AnkleTrial",
+    "list_ankle_trials",
+    "load_ankle_trial",
 ]

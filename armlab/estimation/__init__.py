@@ -1,5 +1,17 @@
 """Estimation of arm impedance from processed trial data."""
 
+from armlab.estimation.arm_tf_models import (
+    IDENTIFIED_MODELS,
+    LITERATURE_MODELS,
+    PUBLISHED_BANDWIDTH_HZ,
+    CommensurateTF,
+    FiveElement,
+    FiveElementFit,
+    check_alpha,
+    five_element_from_tf,
+    s_power,
+    third_order_tf,
+)
 from armlab.estimation.criteria import (
     CriteriaConfig,
     asymmetry,
@@ -11,6 +23,14 @@ from armlab.estimation.criteria import (
     relative_error,
     symmetric_part,
 )
+from armlab.estimation.frf import (
+    FirLowpass,
+    FirLowpassSpec,
+    FrequencyResponse,
+    average_responses,
+    design_fir_lowpass,
+    estimate_frf,
+)
 from armlab.estimation.joint_ls import (
     PARAM_NAMES,
     REDUCED_PARAM_NAMES,
@@ -21,6 +41,16 @@ from armlab.estimation.joint_ls import (
     regressor,
     validate,
 )
+from armlab.estimation.levy import (
+    PAPER_STRUCTURES,
+    FitIndices,
+    LevyFit,
+    LevyStructure,
+    LevySweep,
+    fit_indices,
+    levy_fit,
+    levy_sweep,
+)
 from armlab.estimation.processing import (
     JointSignals,
     ProcessingConfig,
@@ -30,6 +60,30 @@ from armlab.estimation.processing import (
 )
 
 __all__ = [
+    "FirLowpass",
+    "FirLowpassSpec",
+    "FrequencyResponse",
+    "average_responses",
+    "design_fir_lowpass",
+    "estimate_frf",
+    "PAPER_STRUCTURES",
+    "FitIndices",
+    "LevyFit",
+    "LevyStructure",
+    "LevySweep",
+    "fit_indices",
+    "levy_fit",
+    "levy_sweep",
+    "IDENTIFIED_MODELS",
+    "LITERATURE_MODELS",
+    "PUBLISHED_BANDWIDTH_HZ",
+    "CommensurateTF",
+    "FiveElement",
+    "FiveElementFit",
+    "check_alpha",
+    "five_element_from_tf",
+    "s_power",
+    "third_order_tf",
     "CriteriaConfig",
     "asymmetry",
     "condition_number",

@@ -21,6 +21,7 @@ from armlab.errors import ConfigError
 from armlab.sensors.channel import ChannelSpec, apply_channel
 
 __all__ = [
+    "DD_ENCODER",
     "JR3_FORCE",
     "JR3_TORQUE",
     "LWR_ENCODER",
@@ -84,10 +85,16 @@ LWR_JOINT_TORQUE = ChannelSpec(
     delay_s=0.001,  # s, one 1 kHz cycle (assumption)
 )
 
+# --- Direct-drive motor encoder (fractional-elbow paper, seeds/004, III-A) ---------------------
+# The AKD drive's encoder emulator outputs quadrature pulses; 8192 lines x 4 edges = 32768 counts
+# per revolution (assumption: a common emulated resolution), one count = 1.92e-4 rad.
+DD_ENCODER = ChannelSpec(quant_step=2 * math.pi / 32768)
+
 SENSOR_PRESETS: dict[str, ChannelSpec] = {
     "jr3_force": JR3_FORCE,
     "jr3_torque": JR3_TORQUE,
     "lwr_encoder": LWR_ENCODER,
+    "dd_encoder": DD_ENCODER,
     "lwr_joint_torque": LWR_JOINT_TORQUE,
     "ideal": ChannelSpec.ideal(),
 }

@@ -1,0 +1,247 @@
+"""Closed-loop force perturbation of the elbow by the direct-drive motor (seeds/004, Fig. 3).
+
+Each 1/fs control period the controller reads the encoder and the handle force sensor, computes
+
+    tau = tau_Dym + L (F_ref + kp e + ki int(e) + kd de/dt),     e = F_ref - F_measured,
+    tau_Dym = M_hat theta_dd + C_hat theta_d + B_hat sign(theta_d)           (Eqs. (20), (21))
+
+with theta_d, theta_dd from low-passed differences of the encoder, and commands the current
+``I_C = tau / K_torque`` (Eq. (19)) through a 16-bit reference. The elbow's muscles receive their
+co-contraction plus the delayed stretch reflex, or the fractional element its torque. A trial
+whose motor angle leaves the safety range fails with :class:`SimulationError`.
+
+The controller needs each sample's measurement before the next step, so MuJoCo is stepped from
+Python once per control period (``mujoco.rollout`` cannot close a Python feedback loop).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import mujoco
+import numpy as np
+
+from armlab.config.schema import DirectDriveConfig, ElbowConfig, ReflexConfig
+from armlab.errors import ConfigError, SimulationError
+from armlab.models.direct_drive_scene import DirectDriveScene
+from armlab.sensors.channel import ChannelSpec
+from armlab.sim.fractional import FractionalElement
+from armlab.sim.rollout import REFLEX_LENGTH_SCALE_M
+
+__all__ = [
+    "ForceTrial",
+    "simulate_force_trial",
+]
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class ForceTrial:
+    """One recorded force-perturbation trial, all (n,) at ``fs_hz``.
+
+    Attributes:
+        f_ref: N, reference force at the handle.
+        f_measured: N, the force sensor's reading (what the controller used).
+        f_true: N, the grasp force on the hand along the link normal.
+        theta_measured: rad, the encoder reading; ``theta_true`` rad the motor angle.
+        phi_true: rad, the elbow angle from the hold posture.
+        current: A, commanded motor current; ``tau_motor`` N·m = K_torque · current.
+        tau_dym: N·m, the dynamic compensation of Eq. (21).
+        activation: (n, 2) muscle activations (zeros unless the muscle option).
+        fs_hz: Hz.
+    """
+
+    f_ref: np.ndarray
+    f_measured: np.ndarray
+    f_true: np.ndarray
+    theta_measured: np.ndarray
+    theta_true: np.ndarray
+    phi_true: np.ndarray
+    current: np.ndarray
+    tau_motor: np.ndarray
+    tau_dym: np.ndarray
+    activation: np.ndarray
+    fs_hz: float
+
+    @property
+    def tracking_error(self) -> float:
+        """RMS of ``f_measured - f_ref`` relative to the RMS of ``f_ref``."""
+        return float(np.sqrt(np.mean((self.f_measured - self.f_ref) ** 2) / np.mean(self.f_ref**2)))
+
+
+def _measure(clean: float, k: int, noise: np.ndarray, bias: float, drift: float, t: float, q: float) -> float:
+    v = clean + noise[k] + bias + drift * t
+    return round(v / q) * q if q > 0 else v
+
+
+def simulate_force_trial(
+    scene: DirectDriveScene,
+    f_ref: np.ndarray,
+    fs_hz: float,
+    settle_s: float,
+    elbow: ElbowConfig,
+    reflex: ReflexConfig,
+    motor: DirectDriveConfig,
+    force_spec: ChannelSpec,
+    encoder_spec: ChannelSpec,
+    rng: np.random.Generator,
+    accel_noise_rad_s2: float = 0.0,
+) -> ForceTrial:
+    """Simulate one trial: ``settle_s`` of hold at zero force, then ``f_ref`` (recorded).
+
+    Args:
+        scene: the composed direct-drive + elbow scene.
+        f_ref: (n,) N, reference force at 1/fs_hz spacing.
+        fs_hz: Hz, control and sample rate; a whole number of physics steps per period.
+        settle_s: s, unrecorded hold before the reference starts.
+        elbow, reflex, motor: the subject and the controller.
+        force_spec, encoder_spec: sensor imperfections used online (noise, bias, drift,
+            quantisation; the sensors' filters and delays are not modelled in the loop).
+        rng: source of the sensor noise.
+
+    Returns:
+        The recorded :class:`ForceTrial`.
+
+    Raises:
+        SimulationError: the motor angle left ``motor.safety_range_rad``, or the state diverged.
+    """
+    m = scene.model
+    dt = 1.0 / fs_hz
+    substeps = int(round(dt / m.opt.timestep))
+    if substeps < 1 or abs(substeps * m.opt.timestep - dt) > 1e-9:
+        raise ConfigError(
+            f"the control period 1/{fs_hz:g} s must be a whole number of physics steps "
+            f"({m.opt.timestep} s); valid: sim.timestep_s = {dt:g} / n"
+        )
+    n_settle = int(round(settle_s * fs_hz))
+    n = int(np.size(f_ref))
+    total = n_settle + n
+    ref = np.concatenate([np.zeros(n_settle), np.asarray(f_ref, float)])
+
+    f_noise = rng.standard_normal(total) * force_spec.noise_std
+    f_bias = float(rng.standard_normal() * force_spec.bias_std)
+    f_drift = float(rng.standard_normal() * force_spec.drift_per_s)
+    e_noise = rng.standard_normal(total) * encoder_spec.noise_std
+    e_bias = float(rng.standard_normal() * encoder_spec.bias_std)
+    acc_noise = rng.standard_normal(total) * accel_noise_rad_s2
+
+    L, kt = scene.link_length, scene.torque_constant
+    m_hat = scene.link_inertia * (1 + motor.inertia_error)
+    c_hat = scene.viscous * (1 + motor.viscous_error)
+    b_hat = scene.coulomb * (1 + motor.coulomb_error)
+    i_max = float(m.actuator_ctrlrange[scene.motor_act, 1])
+    i_lsb = 2 * i_max / 2**motor.current_bits
+    # first-order low-pass (bilinear) of the differentiated encoder signal
+    wc = np.tan(np.pi * motor.derivative_cutoff_hz * dt)
+    lp_a, lp_b = (1 - wc) / (1 + wc), wc / (1 + wc)
+
+    data = mujoco.MjData(m)
+    muscles = scene.muscle_act
+    act_idx = m.actuator_actadr[muscles] if muscles.size else muscles
+    if muscles.size:
+        data.act[act_idx] = elbow.cocontraction
+        data.ctrl[muscles] = elbow.cocontraction
+    element = None
+    if scene.element_act >= 0:
+        element = FractionalElement.build(
+            elbow.fractional_order, elbow.fractional_coeff, elbow.oustaloup_band_hz, elbow.oustaloup_order, dt
+        )
+        x_el = element.initial_state(0.0)
+    mujoco.mj_forward(m, data)
+    use_reflex = reflex.enabled and muscles.size > 0
+    if use_reflex:
+        lag1 = max(1, int(round(reflex.stretch_latency_s * fs_hz)))
+        lag2 = max(1, int(round(reflex.spinal_latency_s * fs_hz)))
+        len_ref = data.actuator_length[muscles].copy()
+        hist_len = np.tile(len_ref, (total + 1, 1))
+        hist_vel = np.zeros((total + 1, muscles.size))
+
+    out = np.zeros((8, total))
+    act_out = np.zeros((total, 2))
+    sl_psi, sl_psid = scene.sensors["grasp_psi"], scene.sensors["grasp_psi_dot"]
+    kg, dg = scene.grasp_k, scene.grasp_d
+    qm, qe = scene.motor_qpos, scene.elbow_qpos
+    sl_acc = scene.sensors["handle_acc"]
+    saturated, n_saturate = 0, int(round(0.1 * fs_hz))  # 0.1 s at the current limit = failure
+    theta_prev = e_prev = v_f = v_raw_prev = integ = de_f = de_raw_prev = 0.0
+    for k in range(total):
+        t = k * dt
+        theta = float(data.qpos[qm])
+        if not abs(theta) <= motor.safety_range_rad:
+            when = (k - n_settle) * dt
+            raise SimulationError(
+                f"the motor angle reached {theta:+.3f} rad at t = {when:.3f} s, outside the safety range "
+                f"±{motor.safety_range_rad} rad; the trial is aborted (lower the force peak, raise the "
+                "co-contraction or the arm stiffness)"
+            )
+        psi = float(data.sensordata[sl_psi][0])
+        psid = float(data.sensordata[sl_psid][0])
+        f_true = -(kg * psi + dg * psid) / L
+        f_meas = _measure(f_true, k, f_noise, f_bias, f_drift, t, force_spec.quant_step)
+        th_meas = _measure(theta, k, e_noise, e_bias, 0.0, t, encoder_spec.quant_step)
+        if k == 0:
+            theta_prev, e_prev = th_meas, ref[0] - f_meas
+        # velocity: low-passed encoder differences (bilinear first order); acceleration: the JR3
+        # accelerometer's tangential axis, a_y = L theta_dd (sensor data of the last step)
+        v_raw = (th_meas - theta_prev) / dt
+        v_f = lp_a * v_f + lp_b * (v_raw + v_raw_prev)
+        v_raw_prev, theta_prev = v_raw, th_meas
+        a_f = float(data.sensordata[sl_acc][1]) / L + acc_noise[k]
+        sgn = 0.0 if abs(v_f) < motor.sign_deadband_rad_s else (1.0 if v_f > 0 else -1.0)
+        tau_dym = m_hat * a_f + c_hat * v_f + b_hat * sgn
+        e = ref[k] - f_meas
+        integ += e * dt
+        de_raw = (e - e_prev) / dt
+        de_f = lp_a * de_f + lp_b * (de_raw + de_raw_prev)
+        e_prev, de_raw_prev = e, de_raw
+        u_force = ref[k] + motor.kp * e + motor.ki_per_s * integ + motor.kd_s * de_f
+        current = (tau_dym + L * u_force) / kt
+        current = min(max(round(current / i_lsb) * i_lsb, -i_max), i_max)
+        saturated = saturated + 1 if abs(current) >= i_max else 0
+        if saturated > n_saturate:
+            raise SimulationError(
+                f"the motor current stayed at its ±{i_max:.2f} A limit for {n_saturate / fs_hz:.2f} s "
+                f"(t = {(k - n_settle) * dt:.3f} s): the force loop is unstable or the force exceeds the "
+                "motor's peak torque; lower motor.inertia_error (M_hat must stay below the true inertia), "
+                "motor.kp or motor.ki_per_s, or the force peak"
+            )
+        data.ctrl[scene.motor_act] = current
+
+        if use_reflex:
+            hist_len[k] = data.actuator_length[muscles]
+            hist_vel[k] = data.actuator_velocity[muscles]
+            s1 = (hist_len[max(k - lag1, 0)] - len_ref) / REFLEX_LENGTH_SCALE_M
+            r1 = hist_vel[max(k - lag1, 0)] / REFLEX_LENGTH_SCALE_M
+            s2 = (hist_len[max(k - lag2, 0)] - len_ref) / REFLEX_LENGTH_SCALE_M
+            u = (
+                elbow.cocontraction
+                + reflex.stretch_gain * np.maximum(s1, 0.0)
+                + reflex.velocity_gain * np.maximum(r1, 0.0)
+                + reflex.spinal_gain * np.maximum(s2, 0.0)
+            )
+            data.ctrl[muscles] = np.clip(u, 0.0, 1.0)
+        if element is not None:
+            phi = float(data.qpos[qe])
+            data.ctrl[scene.element_act] = -element.coeff * (element.C @ x_el + element.D * phi)
+            x_el = element.A @ x_el + element.B * phi
+
+        out[:, k] = (ref[k], f_meas, f_true, th_meas, theta, data.qpos[qe], current, tau_dym)
+        if muscles.size:
+            act_out[k] = data.act[act_idx]
+        mujoco.mj_step(m, data, nstep=substeps)
+        if not np.isfinite(data.qpos[qm]):
+            raise SimulationError(f"the simulation diverged at t = {(k - n_settle) * dt:.3f} s")
+
+    rec = out[:, n_settle:]
+    return ForceTrial(
+        f_ref=rec[0],
+        f_measured=rec[1],
+        f_true=rec[2],
+        theta_measured=rec[3],
+        theta_true=rec[4],
+        phi_true=rec[5],
+        current=rec[6],
+        tau_motor=rec[6] * kt,
+        tau_dym=rec[7],
+        activation=act_out[n_settle:],
+        fs_hz=float(fs_hz),
+    )

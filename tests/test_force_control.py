@@ -1,0 +1,92 @@
+"""The force loop of the direct-drive motor (seeds/004, Fig. 3, Eqs. (19)-(21))."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from armlab.config.schema import DirectDriveConfig, ElbowConfig, ReflexConfig, SimConfig
+from armlab.errors import ConfigError, SimulationError
+from armlab.models.direct_drive_scene import build_direct_drive_scene
+from armlab.perturbations.multisine import load_force_scenario, multisine
+from armlab.sensors.channel import ChannelSpec
+from armlab.sensors.presets import DD_ENCODER, JR3_FORCE
+from armlab.sim.force_control import simulate_force_trial
+
+FS = 2000.0
+
+
+@pytest.fixture(scope="module")
+def scene():
+    return build_direct_drive_scene(ElbowConfig(impedance="five_element"), SimConfig())
+
+
+def _reference(seconds: float, peak: float = 5.0) -> np.ndarray:
+    f = multisine(load_force_scenario("fractional_elbow"), np.random.default_rng(0))
+    return f[: int(seconds * FS)] * peak / 5.0
+
+
+def _run(scene, f_ref, motor=None, spec=(JR3_FORCE, DD_ENCODER)):
+    return simulate_force_trial(
+        scene,
+        f_ref,
+        FS,
+        0.5,
+        ElbowConfig(impedance="five_element"),
+        ReflexConfig(enabled=False),
+        motor or DirectDriveConfig(),
+        *spec,
+        np.random.default_rng(1),
+    )
+
+
+def test_force_follows_the_reference(scene):
+    tr = _run(scene, _reference(8.0))
+    # measured with the default compensation and PID: 13-14 % RMS error, mostly the phase lag
+    # of the one-period-late accelerometer at 10-15 Hz; the force the hand feels is the same
+    assert tr.tracking_error < 0.2
+    assert np.corrcoef(tr.f_true, tr.f_ref)[0, 1] > 0.98
+    assert np.all(np.abs(tr.theta_true) < 0.9)
+
+
+def test_full_inertia_compensation_destabilises_the_loop(scene):
+    # M_hat = M with a one-period-late accelerometer is a marginal positive feedback: the current
+    # chatters between its limits (measured tracking error ~6 against 0.14 with M_hat = 0.8 M)
+    tr = _run(scene, _reference(8.0), DirectDriveConfig(inertia_error=0.0, kp=0.0, ki_per_s=0.0))
+    assert tr.tracking_error > 1.0
+    assert np.max(np.abs(tr.current)) == pytest.approx(12.34, rel=1e-3)
+
+
+def test_a_trial_that_leaves_the_safety_range_fails_with_a_clear_message():
+    soft = ElbowConfig(impedance="five_element", arm_stiffness_Nm_per_rad=5.0)
+    scene = build_direct_drive_scene(soft, SimConfig())
+    push = np.minimum(np.arange(4000) / 400.0, 1.0) * 20.0  # ramp to 20 N: 7 N m on a 5 N m/rad arm
+    with pytest.raises(SimulationError, match=r"outside the safety range ±0.9 rad; the trial is aborted"):
+        simulate_force_trial(
+            scene,
+            push,
+            FS,
+            0.5,
+            soft,
+            ReflexConfig(enabled=False),
+            DirectDriveConfig(),
+            ChannelSpec(),
+            ChannelSpec(),
+            np.random.default_rng(1),
+        )
+
+
+def test_control_period_must_be_whole_physics_steps(scene):
+    with pytest.raises(ConfigError, match="whole number of physics steps"):
+        simulate_force_trial(
+            scene,
+            np.zeros(10),
+            3000.0,
+            0.0,
+            ElbowConfig(impedance="five_element"),
+            ReflexConfig(enabled=False),
+            DirectDriveConfig(),
+            ChannelSpec(),
+            ChannelSpec(),
+            np.random.default_rng(0),
+        )

@@ -1,0 +1,69 @@
+"""Protocol fractional_elbow (seeds/004) against the five-element ground truth."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from armlab.config.schema import (
+    ElbowConfig,
+    ExperimentConfig,
+    FrfConfig,
+    ReflexConfig,
+    ScenarioConfig,
+    SensorsConfig,
+    SimConfig,
+)
+from armlab.errors import ConfigError
+from armlab.protocols.fractional_elbow import estimate_fractional, simulate_fractional
+
+CFG = ExperimentConfig(
+    protocol_name="fractional_elbow",
+    elbow=ElbowConfig(impedance="five_element"),
+    reflex=ReflexConfig(enabled=False),
+    # 0.1 ms steps: at 0.5 ms the explicit grasp damper biases d1 by ~12 % (measured)
+    sim=SimConfig(timestep_s=0.0001),
+    scenario=ScenarioConfig(name="fractional_elbow"),
+    sensors=SensorsConfig(preset="realistic", fs_hz=2000.0),
+)
+
+
+@pytest.fixture(scope="module")
+def five_element_run():
+    trials, _, truth = simulate_fractional(CFG)
+    return trials, truth, estimate_fractional(trials, CFG.frf, truth)[0]
+
+
+def test_third_order_model_recovers_the_five_elements(five_element_run):
+    _, _, results = five_element_run
+    err = results["five_element_rel_err"]
+    # the issue's 5 %; measured M 1.8, k1 0.4, k2 0.6, d1 4.4, d2 0.5 % (d1, the grasp damper,
+    # shows mostly above the 9 Hz grasp mode and is the least determined)
+    assert max(err.values()) < 0.05, err
+
+
+def test_table_I_structures_are_fitted_with_the_papers_indices(five_element_run):
+    _, _, results = five_element_run
+    models = results["models"]
+    assert set(models) == {"27", "28", "29", "A", "B"}
+    assert models["27"]["alpha"] == 1.0 and models["27"]["r2"] > 0.98
+    for key in ("28", "29"):
+        assert 0 < models[key]["alpha"] < 2
+    # integer 3rd order beats the 2-pole models, as in Table I
+    assert models["27"]["mse"] < models["A"]["mse"]
+    assert results["frf"]["n_freq"] == 134  # 0.12-15 Hz on the 2 kHz / 18000 grid
+
+
+def test_bad_processing_settings_are_rejected(five_element_run):
+    trials, truth, _ = five_element_run
+    with pytest.raises(ConfigError, match="longer than the trial"):
+        estimate_fractional(trials, FrfConfig(welch_window=100_000), truth)
+    with pytest.raises(ConfigError, match="beyond Nyquist"):
+        estimate_fractional(trials, FrfConfig(band_hz=(0.12, 1500.0)), truth)
+    with pytest.raises(ConfigError, match="differs from the scenario"):
+        simulate_fractional(replace(CFG, sensors=SensorsConfig(fs_hz=1000.0)))
+    with pytest.raises(ConfigError, match=r"elbow.fractional_order must lie in \(0, 1\)"):
+        ElbowConfig(fractional_order=1.5)
+    assert np.all(np.asarray(trials.trial_meta["tracking_error"]) < 0.2)
