@@ -24,6 +24,14 @@ from armlab.protocols.runner import run_protocol
 from armlab.sim.hold import settle
 
 
+def _mean_time(fn, reps: int = 20) -> float:
+    """Mean wall time of ``fn()`` in s over ``reps`` calls."""
+    t0 = time.perf_counter()
+    for _ in range(reps):
+        fn()
+    return (time.perf_counter() - t0) / reps
+
+
 def main() -> None:
     cfg = ExperimentConfig()
     with tempfile.TemporaryDirectory() as tmp:
@@ -68,20 +76,12 @@ def main() -> None:
     group, val = tr.trial_meta["group"], tr.trial_meta["validate"]
     masks = np.stack([(group == s.k) & ~val for s in specs])
     wins = np.array([int(round(s.t_obs_s * tr.fs_hz)) for s in specs])
-    reps = 20
     longest = int(np.argmax(wins))
-    t2 = time.perf_counter()
-    for _ in range(reps):
-        estimate_windows(sig, masks, wins)
-    all_w = (time.perf_counter() - t2) / reps
-    t3 = time.perf_counter()
-    for _ in range(reps):
-        estimate(sig, masks[longest], int(wins[longest]))
-    one_qr = (time.perf_counter() - t3) / reps
-    t4 = time.perf_counter()
-    for _ in range(reps):
-        estimate_windows(sig, masks[longest : longest + 1], wins[longest : longest + 1])
-    one_ne = (time.perf_counter() - t4) / reps
+    all_w = _mean_time(lambda: estimate_windows(sig, masks, wins))
+    one_qr = _mean_time(lambda: estimate(sig, masks[longest], int(wins[longest])))
+    one_ne = _mean_time(
+        lambda: estimate_windows(sig, masks[longest : longest + 1], wins[longest : longest + 1])
+    )
     # Samples each window's data holds; the extension windows reuse the longest group's trials.
     used = np.max(np.where(masks, wins[:, None], 0), axis=0).sum()
     data_ratio = used / (masks[longest].sum() * wins[longest])
@@ -92,10 +92,7 @@ def main() -> None:
         f"the windows hold {data_ratio:.1f}x the longest window's samples (disjoint trial groups)"
     )
     nested = np.repeat(masks[longest : longest + 1], len(wins), axis=0)
-    t5 = time.perf_counter()
-    for _ in range(reps):
-        estimate_windows(sig, nested, wins)
-    all_nested = (time.perf_counter() - t5) / reps
+    all_nested = _mean_time(lambda: estimate_windows(sig, nested, wins))
     print(
         f"estimation, all {len(specs)} windows on one shared trial group: {all_nested * 1e3:.1f} ms "
         f"-> ratio {all_nested / one_qr:.1f} against estimate() of the longest"

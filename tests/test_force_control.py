@@ -90,3 +90,31 @@ def test_control_period_must_be_whole_physics_steps(scene):
             ChannelSpec(),
             np.random.default_rng(0),
         )
+
+
+def test_stretch_reflex_raises_activation_only_after_its_latency():
+    cfg = ElbowConfig()  # Hill muscle pair at co-contraction 0.5
+    scene = build_direct_drive_scene(cfg, SimConfig())
+    step = np.full(600, 5.0)  # a 5 N push held for 0.3 s
+    runs = [
+        simulate_force_trial(
+            scene,
+            step,
+            FS,
+            0.2,
+            cfg,
+            ReflexConfig(enabled=on),
+            DirectDriveConfig(),
+            ChannelSpec(),
+            ChannelSpec(),
+            np.random.default_rng(1),
+        )
+        for on in (False, True)
+    ]
+    gap = np.abs(runs[1].activation - runs[0].activation).max(axis=1)
+    lat = int(round(ReflexConfig().stretch_latency_s * FS))
+    assert np.all(gap[:lat] == 0.0)  # nothing before the stretch reflex latency
+    # then the stretched muscle is driven harder: 1.75 N m / ~58 N m/rad = 0.03 rad, times the
+    # 0.04 m moment arm over L0 = 0.1 m = 0.012 normalised stretch; stretch + spinal gains of 0.5
+    # each command ~0.012 more activation (measured gap 0.0099 after activation dynamics)
+    assert 0.005 < gap[lat + 40 :].max() < 0.02

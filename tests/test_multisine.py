@@ -25,10 +25,16 @@ def test_reference_respects_the_paper_band_and_peak():
 
 
 def test_same_generator_same_signal_other_seed_other_phases():
-    sc = replace(load_force_scenario("fractional_elbow"), duration_s=5.0)
+    sc = replace(load_force_scenario("fractional_elbow"), duration_s=10.0, spacing_hz=0.1)
     a = multisine(sc, np.random.default_rng(3))
     assert np.array_equal(a, multisine(sc, np.random.default_rng(3)))
     assert not np.allclose(a, multisine(sc, np.random.default_rng(4)))
+
+
+def test_components_off_the_record_grid_are_rejected():
+    sc = replace(load_force_scenario("fractional_elbow"), duration_s=5.0)  # 0.025 Hz * 5 s = 1/8
+    with pytest.raises(ConfigError, match="not a multiple of 1 / duration_s"):
+        multisine(sc, np.random.default_rng(0))
 
 
 def test_unknown_or_conditioning_scenario_is_rejected():

@@ -170,7 +170,8 @@ def quasi_constant_flags(
     ``|p[k+1, i] - p[k, i]| <= tol · max(|p[k, block(i)]|, floor)``. Scaling by the block norm rather
     than by each parameter keeps small entries (e.g. off-diagonal stiffness near 0) from failing on
     changes that are negligible for the matrix as a whole, while keeping blocks of different units
-    apart. The last window, having no successor, is judged by its change from the previous one.
+    apart. The last window, having no successor, is judged by its change from the previous one; a
+    single window has neither, and is never quasi-constant.
 
     Args:
         params: (n_windows, c) parameter vectors ordered by increasing window length.
@@ -183,8 +184,8 @@ def quasi_constant_flags(
         (n_windows,) bool.
     """
     p = np.asarray(params, dtype=float)
-    if p.ndim != 2 or p.shape[0] < 2:
-        raise DataError(f"params must be (n_windows >= 2, c), got shape {p.shape}")
+    if p.ndim != 2 or p.shape[0] < 1:
+        raise DataError(f"params must be (n_windows >= 1, c), got shape {p.shape}")
     if not (np.isfinite(tol) and tol > 0):
         raise ConfigError(f"tol must be a positive number, got {tol!r}")
     c = p.shape[1]
@@ -195,6 +196,8 @@ def quasi_constant_flags(
     scale = np.empty_like(p)
     for b in blocks:  # a handful of blocks, vectorised over windows
         scale[:, b] = np.maximum(np.linalg.norm(p[:, b], axis=1), floor)[:, None]
+    if p.shape[0] == 1:
+        return np.zeros(1, bool)
     ok = np.all(np.abs(np.diff(p, axis=0)) <= tol * scale[:-1], axis=1)
     return np.append(ok, ok[-1])
 

@@ -123,7 +123,7 @@ def _basis(signals: JointSignals, idx: np.ndarray, length: int) -> np.ndarray:
     return u
 
 
-def _row_maps() -> np.ndarray:
+def _make_row_maps() -> np.ndarray:
     """(2, 10, 12): ``[X | y]`` row r = ``u @ maps[r]``, columns of :data:`PARAM_NAMES` then y."""
     m = np.zeros((2, _N_BASIS, 12))
     for col, src in enumerate((0, 6, 1, 2, 3, None, None, 4, 5, None, None, 8)):  # row 0
@@ -134,6 +134,9 @@ def _row_maps() -> np.ndarray:
             m[1, src, col] = 1.0
     m[1, 1, 2] = 1.0  # qdd1 + qdd2
     return m
+
+
+_ROW_MAPS = _make_row_maps()
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -421,7 +424,7 @@ def estimate_windows(
             blocks = np.matmul(ub, ub.transpose(0, 2, 1)).reshape(idx.size, -1)  # per-trial u u^T
             S += (weight[:, idx] * (wins >= hi)[:, None]) @ blocks
             lo = int(hi)
-    maps = _row_maps()
+    maps = _ROW_MAPS
     if xi_known is not None:  # Eqs. (24)-(25): keep the D, K columns, move the xi terms to y
         maps = np.concatenate(
             [maps[:, :, 3:11], maps[:, :, 11:] - maps[:, :, :3] @ xi_known[:, None]], axis=2

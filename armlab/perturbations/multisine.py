@@ -64,15 +64,22 @@ class ForceScenario:
 def multisine(scenario: ForceScenario, rng: np.random.Generator) -> np.ndarray:
     """One force reference: (n_samples,) N, peak exactly ``peak_N``.
 
-    Phases are uniform in [0, 2 pi) from ``rng``; the sum is normalised to its peak after
-    tapering, so ``max |F_ref| = peak_N``.
+    Phases are uniform in [0, 2 pi) from ``rng``; the components lie on the record's FFT bins
+    (``spacing_hz`` a multiple of ``1 / duration_s``), so the sum is one inverse FFT. The sum is
+    normalised to its peak after tapering, so ``max |F_ref| = peak_N``.
     """
-    f = scenario.frequencies_hz
-    t = np.arange(scenario.n_samples) / scenario.fs_hz
-    phases = rng.uniform(0.0, 2 * np.pi, f.size)
-    x = np.zeros_like(t)
-    for fk, ph in zip(f, phases, strict=True):  # n_components passes over t; no (n, m) temporary
-        x += np.cos(2 * np.pi * fk * t + ph)
+    n = scenario.n_samples
+    bins = scenario.frequencies_hz * n / scenario.fs_hz  # components sit on the record's FFT bins
+    k = np.rint(bins).astype(int)
+    if not np.allclose(bins, k, atol=1e-6):
+        raise ConfigError(
+            f"spacing_hz = {scenario.spacing_hz} Hz is not a multiple of 1 / duration_s = "
+            f"{1 / scenario.duration_s:g} Hz; each component must be periodic in the trial"
+        )
+    phases = rng.uniform(0.0, 2 * np.pi, k.size)
+    spectrum = np.zeros(n // 2 + 1, dtype=complex)
+    spectrum[k] = np.exp(1j * phases) * (n / 2)  # unit cosines cos(2 pi f t + phase)
+    x = np.fft.irfft(spectrum, n)
     n_taper = int(round(scenario.taper_s * scenario.fs_hz))
     if n_taper:
         ramp = 0.5 * (1 - np.cos(np.pi * np.arange(n_taper) / n_taper))

@@ -128,8 +128,7 @@ def _criteria(t_obs: np.ndarray, ests: list[LSEstimate], cfg: EstimatorConfig) -
         ]
     )
     params = np.stack([e.zeta for e in ests])
-    # constancy compares each window with the next: undefined (never met) for a single window
-    const = criteria.quasi_constant_flags(params, cfg.constancy_tol) if len(ests) > 1 else np.zeros(1, bool)
+    const = criteria.quasi_constant_flags(params, cfg.constancy_tol)
     return {
         "K_pd_from_s": criteria.first_satisfied(t_obs, pd),
         "symmetric_from_s": criteria.first_satisfied(t_obs, sym),

@@ -26,7 +26,7 @@ from armlab.errors import ConfigError, SimulationError
 from armlab.models.direct_drive_scene import DirectDriveScene
 from armlab.sensors.channel import ChannelSpec
 from armlab.sim.fractional import FractionalElement
-from armlab.sim.rollout import REFLEX_LENGTH_SCALE_M
+from armlab.sim.rollout import reflex_command
 
 __all__ = [
     "ForceTrial",
@@ -209,16 +209,9 @@ def simulate_force_trial(
         if use_reflex:
             hist_len[k] = data.actuator_length[muscles]
             hist_vel[k] = data.actuator_velocity[muscles]
-            s1 = (hist_len[max(k - lag1, 0)] - len_ref) / REFLEX_LENGTH_SCALE_M
-            r1 = hist_vel[max(k - lag1, 0)] / REFLEX_LENGTH_SCALE_M
-            s2 = (hist_len[max(k - lag2, 0)] - len_ref) / REFLEX_LENGTH_SCALE_M
-            u = (
-                elbow.cocontraction
-                + reflex.stretch_gain * np.maximum(s1, 0.0)
-                + reflex.velocity_gain * np.maximum(r1, 0.0)
-                + reflex.spinal_gain * np.maximum(s2, 0.0)
-            )
-            data.ctrl[muscles] = np.clip(u, 0.0, 1.0)
+            lagged = [max(k - lag1, 0), max(k - lag2, 0)]
+            u = reflex_command(elbow.cocontraction, hist_len[lagged], hist_vel[lagged], len_ref, reflex)
+            data.ctrl[muscles] = u
         if element is not None:
             phi = float(data.qpos[qe])
             data.ctrl[scene.element_act] = -element.coeff * (element.C @ x_el + element.D * phi)

@@ -21,6 +21,7 @@ from armlab.models.scene import MUSCLES, Scene
 __all__ = [
     "REFLEX_LENGTH_SCALE_M",
     "SimResult",
+    "reflex_command",
     "simulate",
 ]
 
@@ -50,7 +51,7 @@ class SimResult:
     fs_hz: float
 
 
-def _reflex_command(
+def reflex_command(
     base: np.ndarray,
     length: np.ndarray,
     velocity: np.ndarray,
@@ -59,7 +60,8 @@ def _reflex_command(
 ) -> np.ndarray:
     """Muscle commands from delayed stretch (arrays already indexed at t - latency).
 
-    ``length``/``velocity`` are (2, n_trials, n_steps, 6): [stretch-lagged, spinal-lagged].
+    ``length``/``velocity`` are (2, ..., n_muscles): [stretch-lagged, spinal-lagged] (the batched
+    rollout passes (2, n_trials, n_steps, 6), the force-control loop (2, 2) per step).
     """
     stretch_s = (length[0] - ref) / REFLEX_LENGTH_SCALE_M
     rate_s = velocity[0] / REFLEX_LENGTH_SCALE_M
@@ -149,7 +151,7 @@ def simulate(
                     length = np.where(valid[None, :, None], hist_len[:, jl], ref_len)
                     vel = np.where(valid[None, :, None], hist_vel[:, jl], 0.0)
                     lagged.append((length, vel))
-                u = _reflex_command(
+                u = reflex_command(
                     muscle_base,
                     np.stack([lagged[0][0], lagged[1][0]]),
                     np.stack([lagged[0][1], lagged[1][1]]),
