@@ -67,3 +67,30 @@ def test_bad_processing_settings_are_rejected(five_element_run):
     with pytest.raises(ConfigError, match=r"elbow.fractional_order must lie in \(0, 1\)"):
         ElbowConfig(fractional_order=1.5)
     assert np.all(np.asarray(trials.trial_meta["tracking_error"]) < 0.2)
+
+
+@pytest.fixture(scope="module")
+def fractional_run():
+    cfg = replace(CFG, elbow=ElbowConfig(impedance="fractional", fractional_order=0.5))
+    trials, _, truth = simulate_fractional(cfg)
+    return truth, estimate_fractional(trials, cfg.frf, truth)[0]
+
+
+def test_fractional_truth_gives_the_true_order(fractional_run):
+    truth, results = fractional_run
+    frac = results["fractional_five_element"]
+    assert frac["true_order"] == truth.fractional_order == 0.5
+    # the 0.1; measured: 0.5 exactly for seeds 0, 1, 2 (0.4 and 0.6 cost 1.2x and 1.03x)
+    assert frac["order_error"] <= 0.1 + 1e-9, frac
+    # springpot coefficient, arm and grasp at the chosen order (measured <= 6 %)
+    assert max(frac["rel_err"].values()) < 0.1, frac["rel_err"]
+    # the integer five-element model is a worse description of a fractional arm
+    assert min(frac["cost"]) < 0.5 * frac["cost"][9]
+
+
+@pytest.mark.slow
+def test_fractional_truth_of_order_0_7_is_found():
+    cfg = replace(CFG, elbow=ElbowConfig(impedance="fractional", fractional_order=0.7))
+    trials, _, truth = simulate_fractional(cfg)
+    frac = estimate_fractional(trials, cfg.frf, truth)[0]["fractional_five_element"]
+    assert frac["order_error"] <= 0.1 + 1e-9, frac

@@ -64,13 +64,21 @@ class ElbowTruth:
         return self.L * (1.0 / zg + 1.0 / za)
 
     @property
+    def fractional_order(self) -> float | None:
+        """Order ``beta`` of the fractional element (None unless the fractional option)."""
+        return None if self.element is None else float(self.element.beta)
+
+    @property
     def five_element(self) -> FiveElement | None:
-        """Translational five-element parameters at the handle (None for the fractional option)."""
-        if self.element is not None:
-            return None
+        """Translational five-element parameters at the handle.
+
+        For the fractional option ``d2`` is the springpot's coefficient ``c / L²`` (N·s^beta/m) of
+        the fractional five-element model (arm damper ``d2 s^beta``); its joint damping is zero.
+        """
         L2 = self.L**2
+        d2 = self.D if self.element is None else self.element.coeff
         return FiveElement(
-            M=self.I / L2, k1=self.grasp_k / L2, k2=self.K / L2, d1=self.grasp_d / L2, d2=self.D / L2
+            M=self.I / L2, k1=self.grasp_k / L2, k2=self.K / L2, d1=self.grasp_d / L2, d2=d2 / L2
         )
 
     def as_dict(self) -> dict:

@@ -14,19 +14,23 @@ model are scored against the simulated ground truth. Pure computation: files are
 from __future__ import annotations
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from armlab.config.schema import ExperimentConfig, FrfConfig
 from armlab.data.trial import TrialSet
-from armlab.errors import ConfigError, DataError
+from armlab.errors import ConfigError, DataError, EstimationError
 from armlab.estimation.arm_tf_models import (
     LITERATURE_MODELS,
-    FiveElement,
     five_element_from_tf,
     third_order_tf,
 )
+from armlab.estimation.five_element_fit import (
+    best_five_element,
+    five_element_guesses,
+    five_element_response,
+    fractional_five_element_sweep,
+)
 from armlab.estimation.frf import FirLowpassSpec, average_responses, design_fir_lowpass, estimate_frf
-from armlab.estimation.levy import PAPER_STRUCTURES, LevyFit, LevyStructure, levy_fit, levy_sweep
+from armlab.estimation.levy import PAPER_STRUCTURES, LevyFit, levy_fit, levy_sweep
 from armlab.models.direct_drive_scene import build_direct_drive_scene
 from armlab.models.elbow_truth import ElbowTruth, elbow_truth
 from armlab.perturbations.multisine import ForceScenario, load_force_scenario, multisine
@@ -40,6 +44,7 @@ __all__ = [
     "simulate_fractional",
 ]
 
+_FIVE = ("M", "k1", "k2", "d1", "d2")
 # Table I of seeds/004: alpha, MSE (x1e-7), MAD (x1e-4), R², number of parameters
 PAPER_TABLE_I = {
     "27": {"alpha": 1.0, "mse": 2.70e-7, "mad": 3.52e-4, "r2": 0.94, "n_params": 5},
@@ -52,7 +57,6 @@ PAPER_TABLE_I = {
 # (assumption: strain-gauge sensor accelerometers resolve of order 0.1 m/s²) -> /L rad/s²
 _ACCEL_NOISE_M_S2 = 0.1
 _NFFT = 18000  # FFT length of the paper's Welch estimate ("18000 samples", Sec. III-B)
-_SPRINGPOT_STEP = 0.1  # beta grid of the inertia-springpot-spring sweep
 
 
 def simulate_fractional(cfg: ExperimentConfig) -> tuple[TrialSet, ForceScenario, ElbowTruth]:
@@ -115,24 +119,6 @@ def simulate_fractional(cfg: ExperimentConfig) -> tuple[TrialSet, ForceScenario,
         },
     )
     return trial_set, scenario, truth
-
-
-def _refine_five_element(f: np.ndarray, G: np.ndarray, start: FiveElement) -> FiveElement:
-    """Five parameters fitted to ``G`` (m/N) directly, from the reading of model (27).
-
-    Model (27) has six free coefficients for the five elements, so its reading is inconsistent
-    by the noise it absorbed (``mismatch_27``); a nonlinear least-squares fit of the five
-    parameters (log scale, relative complex residual) removes that redundancy.
-    """
-    names = ("M", "k1", "k2", "d1", "d2")
-    x0 = np.log([max(abs(getattr(start, n)), 1e-9) for n in names])
-
-    def residual(x: np.ndarray) -> np.ndarray:
-        r = (FiveElement(**dict(zip(names, np.exp(x), strict=True))).to_tf().response(f) - G) / np.abs(G)
-        return np.concatenate([r.real, r.imag])
-
-    sol = least_squares(residual, x0, method="lm")
-    return FiveElement(**dict(zip(names, np.exp(sol.x), strict=True)))
 
 
 def _fit_entry(fit: LevyFit, truth_g: np.ndarray | None, f: np.ndarray, G: np.ndarray) -> dict:
@@ -212,14 +198,6 @@ def estimate_fractional(
         else:
             fit = levy_sweep(f, G, structure, alphas=np.arange(1, 20) * frf_cfg.alpha_step).best
         fits[key] = fit
-    # inertia + springpot + spring: b0 / (1 + a s^beta + a2 s^2), beta on a 0.1 grid (s^2 = s^(20 * 0.1))
-    pot = []
-    for k in range(1, 20):
-        st = LevyStructure(
-            num_powers=(0,), den_powers=(k, 20), name=f"springpot beta={k * _SPRINGPOT_STEP:.1f}"
-        )
-        pot.append(levy_fit(f, G, st, alpha=_SPRINGPOT_STEP))
-    best_pot = int(np.argmin([p.indices.mse for p in pot]))
 
     results = {
         "protocol": trials.attrs.get("protocol", "fractional_elbow"),
@@ -230,12 +208,6 @@ def estimate_fractional(
         "frf": {"n_freq": int(f.size), "band_hz": [lo, hi], "mean_coherence": float(np.mean(frf.coherence))},
         "fir": {"taps": int(fir.taps.size), "ripple_db": fir.ripple_db, "attenuation_db": fir.attenuation_db},
         "models": {k: _fit_entry(v, truth_g, f, G) for k, v in fits.items()},
-        "springpot": {
-            "best_order": (best_pot + 1) * _SPRINGPOT_STEP,
-            "mse": [p.indices.mse for p in pot],
-            "orders": [(k + 1) * _SPRINGPOT_STEP for k in range(19)],
-            "fit": _fit_entry(pot[best_pot], truth_g, f, G),
-        },
         "paper_table_I": PAPER_TABLE_I,
         "literature_bandwidth_hz": {name: tf.bandwidth_hz() for name, tf in LITERATURE_MODELS.items()},
     }
@@ -245,29 +217,47 @@ def estimate_fractional(
     t27 = third_order_tf(
         a3=m27.a[3], a2=m27.a[2], a1=m27.a[1], b2=m27.b[2] * L, b1=m27.b[1] * L, b0=m27.b[0] * L
     )
-    start = five_element_from_tf(t27)
-    fe = _refine_five_element(f, G * L, start.element)
+    G_m = G * L
+    try:  # the reading of model (27) is the paper's start; a shape-based guess when it has none
+        start = five_element_from_tf(t27)
+        reading = {k: getattr(start.element, k) for k in _FIVE}
+        starts, mismatch = [start.element], start.mismatch
+    except EstimationError:
+        reading, mismatch, starts = None, None, []
+    fe = best_five_element(f, G_m, starts + five_element_guesses(f, G_m))
+    sweep = fractional_five_element_sweep(f, G_m, fe, step=frf_cfg.alpha_step)
     results["five_element_fit"] = {
         "M": fe.M,
         "k1": fe.k1,
         "k2": fe.k2,
         "d1": fe.d1,
         "d2": fe.d2,
-        "from_model_27": {k: getattr(start.element, k) for k in ("M", "k1", "k2", "d1", "d2")},
-        "mismatch_27": start.mismatch,
+        "from_model_27": reading,
+        "mismatch_27": mismatch,
     }
-    if truth is not None and truth.five_element is not None:
+    results["fractional_five_element"] = {
+        "best_order": sweep.best_beta,
+        "orders": sweep.betas,
+        "cost": sweep.cost,
+        "mse": [ix.mse / L**2 for ix in sweep.indices],  # (rad/N)², comparable with Table I
+        "best": {k: getattr(sweep.best, k) for k in ("M", "k1", "k2", "d1", "d2")},
+    }
+    if truth is not None:
+        names = _FIVE
         tf = truth.five_element
-        results["five_element_rel_err"] = {
-            name: abs(getattr(fe, name) - getattr(tf, name)) / abs(getattr(tf, name))
-            for name in ("M", "k1", "k2", "d1", "d2")
-        }
+        if truth.fractional_order is None:
+            results["five_element_rel_err"] = {n: abs(getattr(fe, n) / getattr(tf, n) - 1) for n in names}
+        else:
+            frac = results["fractional_five_element"]
+            frac["true_order"] = truth.fractional_order
+            frac["order_error"] = abs(sweep.best_beta - truth.fractional_order)
+            frac["rel_err"] = {n: abs(getattr(sweep.best, n) / getattr(tf, n) - 1) for n in names}
     series = {
         "f_hz": f,
         "G": G,
         "coherence": frf.coherence,
         "G_true": truth_g,
         "fits": {k: v.response(f) for k, v in fits.items()},
-        "springpot": pot[best_pot].response(f),
+        "fractional_five_element": five_element_response(sweep.best, f, sweep.best_beta) / L,
     }
     return results, series
