@@ -2,8 +2,10 @@
 
     armlab run [protocol=<name>] [Hydra overrides ...]   simulate + estimate, outputs in the run dir
     armlab run --multirun seed=0,1,2 ...                 sweep through Hydra's launcher
-    armlab estimate <run_dir> [estimator.<field>=<v>]    re-run estimation on saved trials.h5
+    armlab estimate <run_dir> [<group>.<field>=<v>]      re-run estimation on saved trials.h5
+                                                         (group: estimator, or frf for fractional_elbow)
     armlab view <run_dir>                                open the run's rerun recording
+    armlab fit-joint <csv|folder> [frf.<f>=<v>] [out=<dir>]  FRF + Levy fits of real joint recordings
 
 Bad input is reported on one line (``armlab: error: ...``, exit status 2), never as a traceback.
 """
@@ -19,7 +21,7 @@ from armlab.errors import ArmlabError, ConfigError
 __all__ = ["main"]
 
 GROUPS = ("protocol", "arm", "robot", "sensors", "scenario", "estimator")
-VERBS = ("run", "estimate", "view")
+VERBS = ("run", "estimate", "view", "fit-joint")
 
 
 def _fail(msg: str) -> int:
@@ -35,13 +37,18 @@ def _usage() -> str:
         "usage: armlab <verb> [args]\n\n"
         "verbs:\n"
         "  run [--multirun] [protocol=<name>] [overrides]  simulate a protocol and estimate impedance\n"
-        "  estimate <run_dir> [estimator.<field>=<value>]  re-run estimation on a run's trials.h5\n"
-        "  view <run_dir>                                  open the run's rerun recording (trials.rrd)\n\n"
+        "  estimate <run_dir> [<group>.<field>=<value>]    re-run estimation on a run's trials.h5\n"
+        "                                                  (group: estimator; frf for fractional_elbow)\n"
+        "  view <run_dir>                                  open the run's rerun recording (trials.rrd)\n"
+        "  fit-joint <csv|folder> [frf.<field>=<value>] [out=<dir>]\n"
+        "                                                  impedance/admittance fits of real 1-DoF joint\n"
+        "                                                  recordings (t_s,position_rad,torque_Nm CSV)\n\n"
         f"protocols: {protocols}\n"
         "config groups: " + ", ".join(f"{g}=<{'|'.join(available_options(g))}>" for g in GROUPS) + "\n"
         "examples:\n"
         "  armlab run protocol=conditioning_window seed=3 arm=planar_linear reflex.enabled=false\n"
         "  armlab run --multirun seed=0,1,2 hydra/launcher=joblib\n"
+        "  armlab run protocol=fractional_elbow elbow.impedance=fractional elbow.fractional_order=0.5\n"
     )
 
 
@@ -122,7 +129,7 @@ def _estimate(args: list[str]) -> int:
     from armlab.protocols.runner import format_table, reestimate
 
     if not args:
-        return _fail("estimate needs a run directory: armlab estimate <run_dir> [estimator.<field>=<value>]")
+        return _fail("estimate needs a run directory: armlab estimate <run_dir> [<group>.<field>=<value>]")
     out, results = reestimate(Path(args[0]), args[1:])
     print(format_table(results))
     print(f"outputs: {out}")
@@ -146,13 +153,36 @@ def _view(args: list[str]) -> int:
     return subprocess.call([exe, *cmd[1:]])
 
 
+def _fit_joint(args: list[str]) -> int:
+    from armlab.protocols.joint_report import (
+        default_out_dir,
+        fit_joint_recordings,
+        format_joint_table,
+        joint_frf_config,
+    )
+
+    if not args or "=" in args[0]:
+        return _fail("fit-joint needs a CSV file or folder: armlab fit-joint <csv|folder> [frf.<f>=<v>]")
+    out = default_out_dir()
+    rest = []
+    for item in args[1:]:
+        if item.startswith("out="):
+            out = Path(item.partition("=")[2])
+        else:
+            rest.append(item)
+    results = fit_joint_recordings(Path(args[0]), joint_frf_config(rest), out)
+    print(format_joint_table(results))
+    print(f"outputs: {out}")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     args = sys.argv[1:] if argv is None else list(argv)
     if not args or args[0] in ("-h", "--help", "help"):
         print(_usage())
         return 0
     verb, rest = args[0], args[1:]
-    handlers = {"run": _run, "estimate": _estimate, "view": _view}
+    handlers = {"run": _run, "estimate": _estimate, "view": _view, "fit-joint": _fit_joint}
     if verb not in handlers:
         return _fail(f"unknown verb {verb!r}; valid: {list(VERBS)} (see armlab --help)")
     try:

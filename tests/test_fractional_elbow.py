@@ -32,7 +32,8 @@ CFG = ExperimentConfig(
 
 @pytest.fixture(scope="module")
 def five_element_run():
-    trials, _, truth = simulate_fractional(CFG)
+    rec = simulate_fractional(CFG)
+    trials, truth = rec.trials, rec.truth
     return trials, truth, estimate_fractional(trials, CFG.frf, truth)[0]
 
 
@@ -72,7 +73,8 @@ def test_bad_processing_settings_are_rejected(five_element_run):
 @pytest.fixture(scope="module")
 def fractional_run():
     cfg = replace(CFG, elbow=ElbowConfig(impedance="fractional", fractional_order=0.5))
-    trials, _, truth = simulate_fractional(cfg)
+    rec = simulate_fractional(cfg)
+    trials, truth = rec.trials, rec.truth
     return truth, estimate_fractional(trials, cfg.frf, truth)[0]
 
 
@@ -91,6 +93,7 @@ def test_fractional_truth_gives_the_true_order(fractional_run):
 @pytest.mark.slow
 def test_fractional_truth_of_order_0_7_is_found():
     cfg = replace(CFG, elbow=ElbowConfig(impedance="fractional", fractional_order=0.7))
-    trials, _, truth = simulate_fractional(cfg)
+    rec = simulate_fractional(cfg)
+    trials, truth = rec.trials, rec.truth
     frac = estimate_fractional(trials, cfg.frf, truth)[0]["fractional_five_element"]
     assert frac["order_error"] <= 0.1 + 1e-9, frac

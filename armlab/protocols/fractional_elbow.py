@@ -13,6 +13,8 @@ model are scored against the simulated ground truth. Pure computation: files are
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from armlab.config.schema import ExperimentConfig, FrfConfig
@@ -31,7 +33,7 @@ from armlab.estimation.five_element_fit import (
 )
 from armlab.estimation.frf import FirLowpassSpec, average_responses, design_fir_lowpass, estimate_frf
 from armlab.estimation.levy import PAPER_STRUCTURES, LevyFit, levy_fit, levy_sweep
-from armlab.models.direct_drive_scene import build_direct_drive_scene
+from armlab.models.direct_drive_scene import DirectDriveScene, build_direct_drive_scene
 from armlab.models.elbow_truth import ElbowTruth, elbow_truth
 from armlab.perturbations.multisine import ForceScenario, load_force_scenario, multisine
 from armlab.sensors.channel import ChannelSpec
@@ -39,9 +41,11 @@ from armlab.sensors.presets import DD_ENCODER, JR3_FORCE
 from armlab.sim.force_control import simulate_force_trial
 
 __all__ = [
+    "FractionalRecording",
     "PAPER_TABLE_I",
     "estimate_fractional",
     "simulate_fractional",
+    "time_overlay",
 ]
 
 _FIVE = ("M", "k1", "k2", "d1", "d2")
@@ -56,11 +60,22 @@ PAPER_TABLE_I = {
 # m/s² rms, noise of the JR3's built-in accelerometer used by the inertia compensation
 # (assumption: strain-gauge sensor accelerometers resolve of order 0.1 m/s²) -> /L rad/s²
 _ACCEL_NOISE_M_S2 = 0.1
+_SKIP_S = 5.0  # s, start-up transient left out of the time-domain comparison (Fig. 5)
 _NFFT = 18000  # FFT length of the paper's Welch estimate ("18000 samples", Sec. III-B)
 
 
-def simulate_fractional(cfg: ExperimentConfig) -> tuple[TrialSet, ForceScenario, ElbowTruth]:
-    """Simulate every trial of the protocol; returns the trials, the scenario and the truth."""
+@dataclass(frozen=True, kw_only=True, eq=False)
+class FractionalRecording:
+    """What :func:`simulate_fractional` returns: the trials and how they were made."""
+
+    trials: TrialSet
+    scenario: ForceScenario
+    truth: ElbowTruth
+    scene: DirectDriveScene
+
+
+def simulate_fractional(cfg: ExperimentConfig) -> FractionalRecording:
+    """Simulate every trial of the protocol (``cfg.scenario.n_trials`` of them, or the scenario's)."""
     scenario = load_force_scenario(cfg.scenario.name, cfg.scenario.n_trials)
     if abs(cfg.sensors.fs_hz - scenario.fs_hz) > 1e-9:
         raise ConfigError(
@@ -118,7 +133,7 @@ def simulate_fractional(cfg: ExperimentConfig) -> tuple[TrialSet, ForceScenario,
             "ground_truth": truth.as_dict(),
         },
     )
-    return trial_set, scenario, truth
+    return FractionalRecording(trials=trial_set, scenario=scenario, truth=truth, scene=scene)
 
 
 def _fit_entry(fit: LevyFit, truth_g: np.ndarray | None, f: np.ndarray, G: np.ndarray) -> dict:
@@ -240,6 +255,12 @@ def estimate_fractional(
         "orders": sweep.betas,
         "cost": sweep.cost,
         "mse": [ix.mse / L**2 for ix in sweep.indices],  # (rad/N)², comparable with Table I
+        "best_indices": {  # Eqs. (24)-(26) on |G| in rad/N, as Table I
+            "mse": sweep.indices[sweep.best_index].mse / L**2,
+            "mad": sweep.indices[sweep.best_index].mad / L,
+            "r2": sweep.indices[sweep.best_index].r2,
+            "n_params": 5,  # M, k1, k2, d1, d2 (the order excluded, as alpha in Table I)
+        },
         "best": {k: getattr(sweep.best, k) for k in ("M", "k1", "k2", "d1", "d2")},
     }
     if truth is not None:
@@ -252,12 +273,50 @@ def estimate_fractional(
             frac["true_order"] = truth.fractional_order
             frac["order_error"] = abs(sweep.best_beta - truth.fractional_order)
             frac["rel_err"] = {n: abs(getattr(sweep.best, n) / getattr(tf, n) - 1) for n in names}
+    models = {k: v.response for k, v in fits.items()}
+    models["fractional_five_element"] = lambda ff: five_element_response(sweep.best, ff, sweep.best_beta) / L
+    overlay = time_overlay(force[0], theta[0], fs, models, hi)
+    results["time_vaf_pct"] = overlay["vaf_pct"]
     series = {
         "f_hz": f,
         "G": G,
         "coherence": frf.coherence,
         "G_true": truth_g,
-        "fits": {k: v.response(f) for k, v in fits.items()},
-        "fractional_five_element": five_element_response(sweep.best, f, sweep.best_beta) / L,
+        "fits": {k: model(f) for k, model in models.items()},
+        "literature": {
+            name: tf.response(f) / (L if tf.units == "m/N" else 1.0) for name, tf in LITERATURE_MODELS.items()
+        },
+        "time": overlay,
     }
     return results, series
+
+
+def time_overlay(
+    force: np.ndarray, theta: np.ndarray, fs: float, models: dict, band_hi_hz: float, skip_s: float = _SKIP_S
+) -> dict:
+    """Each model's angle for the measured force of one trial, beside the measured angle (Fig. 5).
+
+    The multisine repeats every trial length (its lines lie on the ``1 / T`` grid), so the
+    steady-state response is the periodic convolution ``irfft(G(f) rfft(F))``, band-limited to
+    ``band_hi_hz`` like the low-passed measured angle; ``skip_s`` of start-up transient (the arm
+    starts at rest) are left out of the VAF and of the returned series. Means are removed.
+
+    Returns:
+        dict with ``t_s``, ``force_N``, ``theta_rad`` and ``models`` ({name: angle}) from
+        ``skip_s`` on, and ``vaf_pct`` ({name: VAF %}).
+    """
+    n = force.size
+    fk = np.fft.rfftfreq(n, 1.0 / fs)
+    keep = (fk > 0) & (fk <= band_hi_hz)
+    spectrum = np.fft.rfft(force - force.mean())
+    i0 = int(round(skip_s * fs))
+    y = theta[i0:] - theta[i0:].mean()
+    out = {"t_s": np.arange(i0, n) / fs, "force_N": force[i0:], "theta_rad": y, "models": {}, "vaf_pct": {}}
+    for name, response in models.items():
+        g = np.zeros(fk.size, dtype=complex)
+        g[keep] = response(fk[keep])
+        yh = np.fft.irfft(g * spectrum, n)[i0:]
+        yh = yh - yh.mean()
+        out["models"][name] = yh
+        out["vaf_pct"][name] = float(100.0 * (1.0 - np.var(y - yh) / np.var(y)))
+    return out

@@ -1,10 +1,14 @@
 """Run a protocol end to end and write its outputs — the edge where files and figures happen.
 
 Outputs in the run directory (never overwritten: a directory that already holds results is
-refused):
-``results.json`` (docs/results_schema.md), ``trials.h5`` (docs/trial_format.md), ``scene.xml``
-(the composed MJCF), ``fig4_full.png``, ``fig5_reduced.png``, ``fig6_validation.png``,
-``errors.png`` and ``trials.rrd`` (rerun recording of every trial).
+refused): ``results.json`` (docs/results_schema.md), ``trials.h5`` (docs/trial_format.md),
+``scene.xml`` (the composed MJCF), the protocol's figures and ``trials.rrd`` (rerun recording of
+every trial).
+
+- ``conditioning_window``: ``fig4_full.png``, ``fig5_reduced.png``, ``fig6_validation.png``,
+  ``errors.png``.
+- ``fractional_elbow``: ``fig4_bode_fits.png``, ``fig5_time_overlay.png``,
+  ``fig6_bode_literature.png`` and ``table_I.txt``.
 """
 
 from __future__ import annotations
@@ -17,10 +21,13 @@ from pathlib import Path
 import numpy as np
 from omegaconf import OmegaConf
 
-from armlab.config.schema import EstimatorConfig, ExperimentConfig
+from armlab.config.schema import EstimatorConfig, ExperimentConfig, FrfConfig
+from armlab.config.store import to_experiment
 from armlab.data.h5io import read_trials, write_trials
 from armlab.data.trial import TrialSet
 from armlab.errors import ConfigError, DataError
+from armlab.models.direct_drive_scene import build_direct_drive_scene
+from armlab.models.elbow_truth import elbow_truth
 from armlab.perturbations.scenario import load_scenario
 from armlab.protocols.conditioning_window import (
     estimate_protocol,
@@ -28,6 +35,7 @@ from armlab.protocols.conditioning_window import (
     simulate_protocol,
     window_specs,
 )
+from armlab.protocols.fractional_elbow import estimate_fractional, simulate_fractional
 
 __all__ = [
     "PROTOCOLS",
@@ -36,7 +44,7 @@ __all__ = [
     "run_protocol",
 ]
 
-PROTOCOLS = ("conditioning_window",)
+PROTOCOLS = ("conditioning_window", "fractional_elbow")
 
 
 def _json_default(obj):
@@ -53,11 +61,39 @@ def _write_json(path: Path, data: dict) -> None:
     path.write_text(json.dumps(data, indent=2, default=_json_default))
 
 
-def _write_outputs(
-    out_dir: Path, trials: TrialSet, results: dict, series: dict, cfg: ExperimentConfig
-) -> dict:
+def _save_trials(path: Path, trials: TrialSet, extra_attrs: dict) -> None:
+    """Write the trial file; drawing aids (body points) stay out of it."""
+    saved = {k: v for k, v in trials.channels.items() if not k.endswith("_points")}
+    write_trials(
+        path,
+        TrialSet(
+            fs_hz=trials.fs_hz,
+            onset_index=trials.onset_index,
+            channels=saved,
+            units={k: trials.units[k] for k in saved},
+            trial_meta=trials.trial_meta,
+            attrs={**trials.attrs, **extra_attrs},
+        ),
+    )
+
+
+def _run_conditioning(cfg: ExperimentConfig, out_dir: Path, config_yaml: str, timing: dict) -> dict:
     from armlab import viz  # the only place figures and recordings are made
 
+    t0 = time.perf_counter()
+    rec, scenario = simulate_protocol(cfg)
+    trials = rec.trials
+    timing["simulate_s"] = time.perf_counter() - t0
+    t1 = time.perf_counter()
+    specs = window_specs(scenario, cfg.estimator)
+    results, series = estimate_protocol(trials, cfg.estimator, specs)
+    results["linearisation_bias"] = linearisation_bias(cfg)
+    timing["estimate_s"] = time.perf_counter() - t1
+    results["simulated_s"] = trials.n_trials * trials.n_samples / trials.fs_hz
+    t2 = time.perf_counter()
+    if cfg.output.trials:
+        _save_trials(out_dir / "trials.h5", trials, {"config_yaml": config_yaml, "scenario": scenario.name})
+    (out_dir / "scene.xml").write_text(rec.scene.xml)
     written = {}
     if cfg.output.figures:
         written["fig4"] = viz.plot_window_sweep(results, out_dir / "fig4_full.png", model="full")
@@ -66,7 +102,50 @@ def _write_outputs(
         written["errors"] = viz.plot_error_vs_window(results, out_dir / "errors.png")
     if cfg.output.recording:
         written["recording"] = viz.write_recording(out_dir / "trials.rrd", trials, results)
+    results["files"] = {k: str(v) for k, v in written.items()}
+    timing["outputs_s"] = time.perf_counter() - t2
+    return results
+
+
+def _fractional_outputs(out_dir: Path, trials: TrialSet, results: dict, series: dict, cfg) -> dict:
+    from armlab import viz
+
+    written = {}
+    if cfg.output.figures:
+        written["fig4"] = viz.plot_bode_fits(series, results, out_dir / "fig4_bode_fits.png")
+        written["fig5"] = viz.plot_time_overlay(series, out_dir / "fig5_time_overlay.png")
+        if series.get("literature"):
+            written["fig6"] = viz.plot_bode_literature(series, out_dir / "fig6_bode_literature.png")
+    table = out_dir / "table_I.txt"
+    if table.exists():
+        raise DataError(f"{table} exists; armlab never overwrites results — use a new run directory")
+    table.write_text(viz.format_fractional_table(results) + "\n")
+    written["table"] = table
+    if cfg.output.recording:
+        written["recording"] = viz.write_fractional_recording(out_dir / "trials.rrd", trials, results)
     return {k: str(v) for k, v in written.items()}
+
+
+def _run_fractional(cfg: ExperimentConfig, out_dir: Path, config_yaml: str, timing: dict) -> dict:
+    t0 = time.perf_counter()
+    rec = simulate_fractional(cfg)
+    timing["simulate_s"] = time.perf_counter() - t0
+    t1 = time.perf_counter()
+    results, series = estimate_fractional(rec.trials, cfg.frf, rec.truth)
+    timing["estimate_s"] = time.perf_counter() - t1
+    results["simulated_s"] = rec.trials.n_trials * rec.trials.n_samples / rec.trials.fs_hz
+    t2 = time.perf_counter()
+    if cfg.output.trials:
+        _save_trials(
+            out_dir / "trials.h5", rec.trials, {"config_yaml": config_yaml, "scenario": rec.scenario.name}
+        )
+    (out_dir / "scene.xml").write_text(rec.scene.xml)
+    results["files"] = _fractional_outputs(out_dir, rec.trials, results, series, cfg)
+    timing["outputs_s"] = time.perf_counter() - t2
+    return results
+
+
+_RUNS = {"conditioning_window": _run_conditioning, "fractional_elbow": _run_fractional}
 
 
 def run_protocol(cfg: ExperimentConfig, out_dir: Path, config_yaml: str = "") -> dict:
@@ -80,60 +159,47 @@ def run_protocol(cfg: ExperimentConfig, out_dir: Path, config_yaml: str = "") ->
     Returns:
         The results dict (also written to ``results.json``).
     """
-    if cfg.protocol_name not in PROTOCOLS:
+    if cfg.protocol_name not in _RUNS:
         raise ConfigError(f"unknown protocol {cfg.protocol_name!r}; valid: {list(PROTOCOLS)}")
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     if (out_dir / "results.json").exists():
         raise DataError(f"{out_dir} already holds results.json; armlab never overwrites a run")
-    timing = {}
+    timing: dict = {}
     t0 = time.perf_counter()
-    rec, scenario = simulate_protocol(cfg)
-    timing["simulate_s"] = time.perf_counter() - t0
-    trials = TrialSet(
-        fs_hz=rec.trials.fs_hz,
-        onset_index=rec.trials.onset_index,
-        channels=rec.trials.channels,
-        units=rec.trials.units,
-        trial_meta=rec.trials.trial_meta,
-        attrs={**rec.trials.attrs, "config_yaml": config_yaml, "scenario": scenario.name},
-    )
-    t1 = time.perf_counter()
-    specs = window_specs(scenario, cfg.estimator)
-    results, series = estimate_protocol(trials, cfg.estimator, specs)
-    results["linearisation_bias"] = linearisation_bias(cfg)
-    timing["estimate_s"] = time.perf_counter() - t1
-    simulated_s = trials.n_trials * trials.n_samples / trials.fs_hz
-    results["simulated_s"] = simulated_s
-    t2 = time.perf_counter()
-    if cfg.output.trials:  # drawing aids (body points) stay out of the trial file
-        saved = {k: v for k, v in trials.channels.items() if not k.endswith("_points")}
-        write_trials(
-            out_dir / "trials.h5",
-            TrialSet(
-                fs_hz=trials.fs_hz,
-                onset_index=trials.onset_index,
-                channels=saved,
-                units={k: trials.units[k] for k in saved},
-                trial_meta=trials.trial_meta,
-                attrs=trials.attrs,
-            ),
-        )
-    (out_dir / "scene.xml").write_text(rec.scene.xml)
-    results["files"] = _write_outputs(out_dir, trials, results, series, cfg)
-    timing["outputs_s"] = time.perf_counter() - t2
+    results = _RUNS[cfg.protocol_name](cfg, out_dir, config_yaml, timing)
     timing["total_s"] = time.perf_counter() - t0
     results["timing"] = timing
     _write_json(out_dir / "results.json", results)
     return results
 
 
+def _overrides(stored, prefix: str, schema, overrides: list[str] | None):
+    """The stored ``prefix`` config group updated by ``prefix.<field>=<value>`` overrides."""
+    cfg = OmegaConf.merge(OmegaConf.structured(schema), stored.get(prefix, {}))
+    for item in overrides or []:
+        key, sep, value = item.partition("=")
+        if not sep or not key.startswith(f"{prefix}."):
+            raise ConfigError(f"override {item!r} must look like {prefix}.<field>=<value>")
+        field = key.split(".", 1)[1]
+        if field not in cfg:
+            raise ConfigError(f"unknown {prefix} field {field!r}; valid: {sorted(cfg.keys())}")
+        cfg[field] = OmegaConf.create({"v": value})["v"] if value != "null" else None
+    try:
+        return OmegaConf.to_object(cfg)
+    except ConfigError:
+        raise
+    except Exception as exc:
+        raise ConfigError(str(exc).splitlines()[0]) from None
+
+
 def reestimate(run_dir: Path, overrides: list[str] | None = None) -> tuple[Path, dict]:
     """Re-run the estimation on a run's saved ``trials.h5`` without simulating again.
 
-    The estimator settings come from the run's stored config, updated by ``overrides`` of the form
-    ``estimator.<field>=<value>``. Results go to a new ``reestimate_<timestamp>/`` directory
-    inside the run directory.
+    The settings come from the run's stored config, updated by overrides of the form
+    ``estimator.<field>=<value>`` (conditioning_window) or ``frf.<field>=<value>``
+    (fractional_elbow). Results go to a new ``reestimate_<timestamp>/`` directory inside the run
+    directory.
     """
     run_dir = Path(run_dir)
     path = run_dir / "trials.h5"
@@ -141,21 +207,22 @@ def reestimate(run_dir: Path, overrides: list[str] | None = None) -> tuple[Path,
         raise DataError(f"{run_dir} has no trials.h5; give a run directory made by `armlab run`")
     trials = read_trials(path)
     stored = OmegaConf.create(trials.attrs.get("config_yaml") or "{}")
-    est_cfg = OmegaConf.merge(OmegaConf.structured(EstimatorConfig), stored.get("estimator", {}))
-    for item in overrides or []:
-        key, sep, value = item.partition("=")
-        if not sep or not key.startswith("estimator."):
-            raise ConfigError(f"override {item!r} must look like estimator.<field>=<value>")
-        field = key.split(".", 1)[1]
-        if field not in est_cfg:
-            raise ConfigError(f"unknown estimator field {field!r}; valid: {sorted(est_cfg.keys())}")
-        est_cfg[field] = OmegaConf.create({"v": value})["v"] if value != "null" else None
-    estimator = OmegaConf.to_object(est_cfg)
-    scenario_name = str(trials.attrs.get("scenario", "conditioning_window"))
-    scenario = load_scenario(scenario_name)
-    groups = sorted(set(np.asarray(trials.trial_meta["group"]).tolist()))
-    scenario = scenario.subset(k_values=groups, n_trials=None)
-    results, series = estimate_protocol(trials, estimator, window_specs(scenario, estimator))
+    protocol = str(trials.attrs.get("protocol", "conditioning_window"))
+    if protocol == "fractional_elbow":
+        frf = _overrides(stored, "frf", FrfConfig, overrides)
+        truth = None
+        if "elbow" in stored:  # the truth is rebuilt from the stored model settings (no simulation)
+            exp = to_experiment(OmegaConf.merge(OmegaConf.structured(ExperimentConfig), stored))
+            truth = elbow_truth(build_direct_drive_scene(exp.elbow, exp.sim), exp.elbow, trials.fs_hz)
+        results, _ = estimate_fractional(trials, frf, truth)
+    elif protocol == "conditioning_window":
+        estimator = _overrides(stored, "estimator", EstimatorConfig, overrides)
+        scenario = load_scenario(str(trials.attrs.get("scenario", "conditioning_window")))
+        groups = sorted(set(np.asarray(trials.trial_meta["group"]).tolist()))
+        scenario = scenario.subset(k_values=groups, n_trials=None)
+        results, _ = estimate_protocol(trials, estimator, window_specs(scenario, estimator))
+    else:
+        raise DataError(f"{path} holds trials of protocol {protocol!r}; valid: {list(PROTOCOLS)}")
     out = run_dir / f"reestimate_{datetime.now():%Y-%m-%d_%H-%M-%S-%f}"
     out.mkdir()
     _write_json(out / "results.json", results)
@@ -167,7 +234,26 @@ def _fmt(x) -> str:
 
 
 def format_table(results: dict) -> str:
-    """The window sweep as a text table (printed at the end of ``make run``)."""
+    """The run's results as a text table (printed at the end of ``armlab run``)."""
+    if results.get("protocol") == "fractional_elbow":
+        from armlab.viz import format_fractional_table
+
+        return format_fractional_table(results) + _timing_line(results)
+    return _conditioning_table(results) + _timing_line(results)
+
+
+def _timing_line(results: dict) -> str:
+    if "timing" not in results:
+        return ""
+    t = results["timing"]
+    return (
+        f"\nsimulated {results['simulated_s']:.0f} s in {t['simulate_s']:.1f} s "
+        f"({results['simulated_s'] / t['simulate_s']:.0f}x real time); estimation {t['estimate_s']:.2f} s; "
+        f"outputs {t['outputs_s']:.1f} s; total {t['total_s']:.1f} s"
+    )
+
+
+def _conditioning_table(results: dict) -> str:
     lines = [
         "T_obs  k  ext |   cond  |  eig(K_s)       | K err  D err  xi err | reduced K err  D err | VAF1  VAF2",
     ]
@@ -197,12 +283,5 @@ def format_table(results: dict) -> str:
             f"linearisation bias ({b['muscle']} muscles, {b['conditions']}) at T_obs = "
             f"{b['t_obs_s'] * 1000:.0f} ms: K {b['K_rel_err'] * 100:.2f} %, D {b['D_rel_err'] * 100:.2f} %, "
             f"xi {b['xi_rel_err'] * 100:.2f} %"
-        )
-    if "timing" in results:
-        t = results["timing"]
-        lines.append(
-            f"simulated {results['simulated_s']:.0f} s in {t['simulate_s']:.1f} s "
-            f"({results['simulated_s'] / t['simulate_s']:.0f}x real time); estimation {t['estimate_s']:.2f} s; "
-            f"outputs {t['outputs_s']:.1f} s; total {t['total_s']:.1f} s"
         )
     return "\n".join(lines)

@@ -9,6 +9,15 @@ from armlab.viz.figures import (
     plot_validation,
     plot_window_sweep,
 )
+from armlab.viz.fractional import (
+    FRACTIONAL_SCALAR_CHANNELS,
+    format_fractional_table,
+    plot_bode_fits,
+    plot_bode_literature,
+    plot_time_overlay,
+    write_fractional_recording,
+)
+from armlab.viz.joint import plot_joint_bode
 from armlab.viz.recording import (
     DEFAULT_SCALAR_CHANNELS,
     view_command,
@@ -22,4 +31,11 @@ __all__ = [
     "plot_window_sweep",
     "view_command",
     "write_recording",
+    "FRACTIONAL_SCALAR_CHANNELS",
+    "format_fractional_table",
+    "plot_bode_fits",
+    "plot_bode_literature",
+    "plot_time_overlay",
+    "write_fractional_recording",
+    "plot_joint_bode",
 ]
