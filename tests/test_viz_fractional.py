@@ -227,7 +227,7 @@ def test_table_lists_every_model_and_the_paper():
     assert "best fractional order β = 0.5 (true 0.5)" in text
     assert "13.7 %" in text and "14.2 %" in text
     assert "k1 = 2089 N/m" in text
-    assert "rel. error vs truth" in text
+    assert "rel. error vs the intrinsic truth" in text
     assert "99.3" in text  # the time-domain VAF of the fractional five-element model
 
 
