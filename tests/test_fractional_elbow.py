@@ -65,6 +65,8 @@ def test_bad_processing_settings_are_rejected(five_element_run):
         estimate_fractional(trials, FrfConfig(band_hz=(0.12, 1500.0)), truth)
     with pytest.raises(ConfigError, match="differs from the scenario"):
         simulate_fractional(replace(CFG, sensors=SensorsConfig(fs_hz=1000.0)))
+    with pytest.raises(ConfigError, match="frf.alpha_step must divide 1"):
+        FrfConfig(alpha_step=0.3)
     with pytest.raises(ConfigError, match=r"elbow.fractional_order must lie in \(0, 1\)"):
         ElbowConfig(fractional_order=1.5)
     assert np.all(np.asarray(trials.trial_meta["tracking_error"]) < 0.2)
