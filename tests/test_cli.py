@@ -187,5 +187,10 @@ def test_fractional_elbow_reestimate_uses_frf_overrides(fractional_run):
     proc = _armlab("estimate", str(run_dir), "frf.welch_window=10000", cwd=run_dir)
     assert proc.returncode == 0, proc.stderr
     out = Path(proc.stdout.strip().splitlines()[-1].removeprefix("outputs: "))
-    assert json.loads((out / "results.json").read_text())["frf"]["n_freq"] == first["frf"]["n_freq"]
+    frf = json.loads((out / "results.json").read_text())["frf"]
+    assert frf["settings"]["welch_window"] == 10000 and first["frf"]["settings"]["welch_window"] == 5000
+    assert frf["mean_coherence"] != pytest.approx(first["frf"]["mean_coherence"], rel=1e-6)
+    # values the schema rejects or cannot parse: one-line errors, no traceback
+    assert main(["estimate", str(run_dir), "frf.welch_window=abc"]) == 2
+    assert main(["estimate", str(run_dir), "frf.band_hz=[20,10]"]) == 2
     assert main(["estimate", str(run_dir), "estimator.lowpass_hz=3"]) == 2

@@ -131,12 +131,13 @@ def test_public_api_resolves():
     import armlab.estimation as est
     import armlab.estimation.arm_tf_models as tfm
     import armlab.estimation.criteria as crit
+    import armlab.estimation.five_element_fit as ffit
     import armlab.estimation.frf as frf
     import armlab.estimation.joint_ls as ls
     import armlab.estimation.levy as levy
     import armlab.estimation.processing as proc
 
-    modules = (crit, ls, proc, frf, levy, tfm)
+    modules = (crit, ls, proc, frf, levy, tfm, ffit)
     for module in (est, *modules):
         assert all(hasattr(module, name) for name in module.__all__), module.__name__
     assert set().union(*(m.__all__ for m in modules)) == set(est.__all__)

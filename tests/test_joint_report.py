@@ -63,6 +63,11 @@ def test_single_file_and_bad_input(folder, tmp_path, capsys):
     assert list(results["trials"]) == ["a"]
     with pytest.raises(DataError, match="not empty"):
         fit_joint_recordings(folder / "a.csv", joint_frf_config(), out)
+    (tmp_path / "afile").write_text("keep me")
+    with pytest.raises(DataError, match="not a directory"):
+        fit_joint_recordings(folder / "a.csv", joint_frf_config(), tmp_path / "afile")
+    assert (tmp_path / "afile").read_text() == "keep me"
+    assert joint_frf_config(["frf.band_hz=[1,20]"]).band_hz[1] == 20.0
     with pytest.raises(DataError, match="neither a folder"):
         fit_joint_recordings(folder / "missing.csv", joint_frf_config(), tmp_path / "x")
     with pytest.raises(ConfigError, match="unknown frf field 'nope'"):

@@ -12,6 +12,7 @@ from armlab.errors import ConfigError
 
 __all__ = [
     "CONFIG_DIR",
+    "apply_overrides",
     "available_options",
     "register_configs",
     "to_experiment",
@@ -42,3 +43,39 @@ def to_experiment(cfg: DictConfig) -> ExperimentConfig:
     if not isinstance(obj, ExperimentConfig):
         raise ConfigError(f"composed config is a {type(obj).__name__}, not an ExperimentConfig")
     return obj
+
+
+def apply_overrides(base, prefix: str, overrides: list[str] | None = None):
+    """A config group updated by ``<prefix>.<field>=<value>`` overrides, validated.
+
+    Args:
+        base: the group's dataclass instance (its ``__post_init__`` checks run on the result) or a
+            structured DictConfig of it.
+        prefix: the group's name in the experiment config (e.g. ``"frf"``, ``"estimator"``).
+        overrides: items like ``frf.welch_window=10000``, ``frf.band_hz=[0.5,40]``, ``x.y=null``.
+
+    Returns:
+        The updated dataclass instance.
+
+    Raises:
+        ConfigError: an item of another shape, an unknown field, or a value the schema rejects,
+            each naming the valid choices or the problem.
+    """
+    cfg = base if isinstance(base, DictConfig) else OmegaConf.structured(base)
+    for item in overrides or []:
+        key, sep, value = item.partition("=")
+        if not sep or not key.startswith(f"{prefix}.") or key.count(".") != 1:
+            raise ConfigError(f"argument {item!r} must look like {prefix}.<field>=<value>")
+        name = key.split(".", 1)[1]
+        if name not in cfg:
+            raise ConfigError(f"unknown {prefix} field {name!r}; valid: {sorted(cfg.keys())}")
+        try:
+            cfg = OmegaConf.merge(cfg, OmegaConf.from_dotlist([f"{name}={value}"]))
+        except Exception as exc:  # OmegaConf type errors: keep their first line, name the field
+            raise ConfigError(f"{item}: {str(exc).strip().splitlines()[0]}") from None
+    try:
+        return OmegaConf.to_object(cfg)
+    except ConfigError:
+        raise
+    except Exception as exc:
+        raise ConfigError(str(exc).strip().splitlines()[0]) from None

@@ -7,6 +7,7 @@ from armlab.estimation.arm_tf_models import (
     CommensurateTF,
     FiveElement,
     FiveElementFit,
+    bandwidth_hz,
     check_alpha,
     five_element_from_tf,
     s_power,
@@ -22,6 +23,14 @@ from armlab.estimation.criteria import (
     quasi_constant_flags,
     relative_error,
     symmetric_part,
+)
+from armlab.estimation.five_element_fit import (
+    FractionalFiveElementSweep,
+    best_five_element,
+    five_element_guesses,
+    five_element_response,
+    fractional_five_element_sweep,
+    refine_five_element,
 )
 from armlab.estimation.frf import (
     FirLowpass,
@@ -47,6 +56,7 @@ from armlab.estimation.levy import (
     LevyFit,
     LevyStructure,
     LevySweep,
+    alpha_grid,
     fit_indices,
     levy_fit,
     levy_sweep,
@@ -60,6 +70,14 @@ from armlab.estimation.processing import (
 )
 
 __all__ = [
+    "alpha_grid",
+    "refine_five_element",
+    "fractional_five_element_sweep",
+    "five_element_response",
+    "five_element_guesses",
+    "best_five_element",
+    "FractionalFiveElementSweep",
+    "bandwidth_hz",
     "FirLowpass",
     "FirLowpassSpec",
     "FrequencyResponse",

@@ -20,6 +20,7 @@ from armlab.errors import ConfigError, EstimationError
 __all__ = [
     "IDENTIFIED_MODELS",
     "LITERATURE_MODELS",
+    "bandwidth_hz",
     "PUBLISHED_BANDWIDTH_HZ",
     "CommensurateTF",
     "FiveElement",
@@ -54,6 +55,33 @@ def s_power(f_hz: np.ndarray, exponents: np.ndarray) -> np.ndarray:
     omega = 2.0 * np.pi * np.asarray(f_hz, dtype=float)[:, None]
     e = np.asarray(exponents, dtype=float)[None, :]
     return np.power(omega, e) * np.exp(0.5j * np.pi * e)
+
+
+def bandwidth_hz(response, dc_gain_abs: float, f_max_hz: float = 1e3, n_grid: int = 4000) -> float:
+    """-3 dB bandwidth of any response: lowest frequency where ``|response(f)|`` falls 3 dB below
+    ``dc_gain_abs`` (Table II's column).
+
+    A log grid from 1e-4 Hz to ``f_max_hz`` locates the first downward crossing (past any resonance
+    peak) and Brent's method refines it to 1e-12 Hz.
+
+    Args:
+        response: callable, frequencies (Hz, array) -> complex response.
+        dc_gain_abs: ``|G(0)|``, the reference level.
+        f_max_hz: Hz, upper end of the search.
+        n_grid: grid points.
+    """
+    f = np.logspace(-4, np.log10(f_max_hz), int(n_grid))
+    below = np.flatnonzero(np.abs(response(f)) < _MINUS_3DB * dc_gain_abs)
+    if below.size == 0 or below[0] == 0:
+        raise EstimationError(
+            f"|G| does not fall 3 dB below its low-frequency value between 1e-4 and {f_max_hz:g} Hz"
+        )
+    i = int(below[0])
+    return float(
+        brentq(
+            lambda x: abs(response(np.array([x]))[0]) - _MINUS_3DB * dc_gain_abs, f[i - 1], f[i], xtol=1e-12
+        )
+    )
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -121,18 +149,7 @@ class CommensurateTF:
             raise EstimationError(
                 "the bandwidth needs a nonzero low-frequency gain b_0; this model has b_0 = 0"
             )
-        f = np.concatenate([[0.0], np.logspace(-4, np.log10(f_max_hz), int(n_grid))])
-        below = np.flatnonzero(np.abs(self.response(f)) < _MINUS_3DB * ref)
-        if below.size == 0:
-            raise EstimationError(
-                f"|G| does not fall 3 dB below its low-frequency value up to {f_max_hz:g} Hz"
-            )
-        i = int(below[0])
-        return float(
-            brentq(
-                lambda x: abs(self.response(np.array([x]))[0]) - _MINUS_3DB * ref, f[i - 1], f[i], xtol=1e-12
-            )
-        )
+        return bandwidth_hz(self.response, ref, f_max_hz, n_grid)
 
 
 def third_order_tf(

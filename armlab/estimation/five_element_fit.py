@@ -5,7 +5,7 @@ The five-element model of Sec. IV-B of seeds/004 puts the hand grasp (spring ``k
 hand force is ``1/(d1 s + k1) + 1/(M s² + d2 s + k2)`` (Eq. (31)). Its transfer function (27) has
 six coefficients for five parameters, so a Levy fit of (27) read by Eqs. (32)-(37) is inconsistent
 by the noise it absorbed; :func:`refine_five_element` fits the five parameters to the response
-directly (log-parameters, relative complex residual, Levenberg-Marquardt).
+directly (log-parameters, relative complex residual, bounded trust-region least squares).
 
 The fractional generalisation replaces the arm damper by a springpot ``d2 s^beta`` (a fractional
 viscoelastic element between spring, ``beta = 0``, and damper, ``beta = 1``). Levy's commensurate
@@ -23,9 +23,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import least_squares
 
-from armlab.errors import EstimationError
+from armlab.errors import ConfigError, EstimationError
 from armlab.estimation.arm_tf_models import FiveElement, check_alpha
-from armlab.estimation.levy import FitIndices, fit_indices
+from armlab.estimation.levy import FitIndices, alpha_grid, fit_indices
 
 __all__ = [
     "FractionalFiveElementSweep",
@@ -67,13 +67,13 @@ def _fit(f: np.ndarray, G: np.ndarray, start: FiveElement, beta: float) -> tuple
     s = 2j * np.pi * f
     scale = np.abs(G)
 
-    def residual(x: np.ndarray) -> np.ndarray:
+    def residual(x: np.ndarray) -> np.ndarray:  # five_element_response inlined: no dataclass per call
         M, k1, k2, d1, d2 = np.exp(x)
         r = (1.0 / (d1 * s + k1) + 1.0 / (M * s**2 + d2 * s**beta + k2) - G) / scale
         return np.concatenate([r.real, r.imag])
 
     # each parameter within a factor e^_LOG_SPAN of its start: keeps exp() finite on wild steps
-    sol = least_squares(residual, x0, bounds=(x0 - _LOG_SPAN, x0 + _LOG_SPAN), method="trf", x_scale=1.0)
+    sol = least_squares(residual, x0, bounds=(x0 - _LOG_SPAN, x0 + _LOG_SPAN), method="trf")
     element = FiveElement(**dict(zip(_NAMES, np.exp(sol.x), strict=True)))
     return element, float(np.mean(sol.fun**2) * 2)  # mean |relative complex residual|²
 
@@ -159,15 +159,15 @@ def fractional_five_element_sweep(
         The :class:`FractionalFiveElementSweep`.
     """
     f, G = _check(f_hz, G_m_per_N)
-    n_unit = round(1.0 / step) if step > 0 else 0
-    if not (0 < step < 1) or abs(n_unit * step - 1.0) > 1e-9:
-        raise EstimationError(f"step must divide 1 (e.g. 0.1, 0.05, 0.25), got {step}")
-    ks = np.arange(1, 2 * n_unit)
-    betas = ks * (1.0 / n_unit)
-    elements: list[FiveElement | None] = [None] * ks.size
-    cost = np.full(ks.size, np.inf)
+    try:
+        betas = alpha_grid(step)
+    except ConfigError as exc:
+        raise EstimationError(str(exc)) from None
+    n_unit = round(1.0 / step)
+    elements: list[FiveElement | None] = [None] * betas.size
+    cost = np.full(betas.size, np.inf)
     i1 = n_unit - 1  # index of beta = 1
-    for order in (range(i1, -1, -1), range(i1, ks.size)):  # continue down, then up, from beta = 1
+    for order in (range(i1, -1, -1), range(i1, betas.size)):  # continue down, then up, from beta = 1
         prev = start
         for i in order:
             if elements[i] is None:

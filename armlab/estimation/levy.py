@@ -38,6 +38,7 @@ __all__ = [
     "LevyFit",
     "LevyStructure",
     "LevySweep",
+    "alpha_grid",
     "fit_indices",
     "levy_fit",
     "levy_sweep",
@@ -283,6 +284,14 @@ def levy_fit(
     )
 
 
+def alpha_grid(step: float = 0.1) -> np.ndarray:
+    """The orders ``step, 2 step, ...`` below 2 (Sec. IV-A's grid); ``step`` must divide 1."""
+    n_unit = round(1.0 / step) if 0 < step < 1 else 0
+    if n_unit < 2 or abs(n_unit * step - 1.0) > 1e-9:
+        raise ConfigError(f"the alpha step must divide 1 (e.g. 0.1, 0.05, 0.25, 0.5), got {step}")
+    return np.round(np.arange(1, 2 * n_unit) / n_unit, 12)
+
+
 def levy_sweep(
     f_hz: np.ndarray,
     G: np.ndarray,
@@ -308,7 +317,7 @@ def levy_sweep(
     """
     if criterion not in ("mse", "mad", "r2"):
         raise ConfigError(f"criterion must be 'mse', 'mad' or 'r2', got {criterion!r}")
-    grid = np.round(np.arange(1, 20) * 0.1, 10) if alphas is None else np.asarray(alphas, dtype=float)
+    grid = alpha_grid(0.1) if alphas is None else np.asarray(alphas, dtype=float)
     if grid.ndim != 1 or grid.size == 0:
         raise ConfigError(f"alphas must be a non-empty 1-D sequence in ]0, 2[, got shape {grid.shape}")
     for al in grid:

@@ -1,5 +1,7 @@
 """Loading and composing the MJCF models, analytic arm kinematics, and ground truth."""
 
+from armlab.models.direct_drive_scene import ELBOW_MUSCLES, DirectDriveScene, build_direct_drive_scene
+from armlab.models.elbow_truth import ElbowTruth, elbow_truth
 from armlab.models.ground_truth import (
     GroundTruth,
     base_inertial_parameters,
@@ -18,6 +20,11 @@ from armlab.models.scene import (
 )
 
 __all__ = [
+    "elbow_truth",
+    "ElbowTruth",
+    "build_direct_drive_scene",
+    "DirectDriveScene",
+    "ELBOW_MUSCLES",
     "GroundTruth",
     "MODELS_DIR",
     "MUSCLES",

@@ -10,7 +10,8 @@ at the handle ``F`` and the motor angle ``theta`` obey
     theta / F = L (1 / Zg + 1 / Za),
 
 the five-element structure of Eqs. (31)-(37) of seeds/004 with, at the handle,
-``M = I / L²``, ``k1 = k_g / L²``, ``d1 = d_g / L²``, ``k2 = K / L²``, ``d2 = D / L²``.
+``M = I / L²``, ``k1 = k_g / L²``, ``d1 = d_g / L²``, ``k2 = K / L²``, ``d2 = D / L²`` — or, for
+the fractional element, ``d2 = c / L²`` (N·s^beta/m) of the arm damper ``d2 s^beta``.
 """
 
 from __future__ import annotations
@@ -69,7 +70,7 @@ class ElbowTruth:
         return None if self.element is None else float(self.element.beta)
 
     @property
-    def five_element(self) -> FiveElement | None:
+    def five_element(self) -> FiveElement:
         """Translational five-element parameters at the handle.
 
         For the fractional option ``d2`` is the springpot's coefficient ``c / L²`` (N·s^beta/m) of
@@ -92,8 +93,7 @@ class ElbowTruth:
             "L_m": self.L,
         }
         fe = self.five_element
-        if fe is not None:
-            out["five_element"] = {"M": fe.M, "k1": fe.k1, "k2": fe.k2, "d1": fe.d1, "d2": fe.d2}
+        out["five_element"] = {"M": fe.M, "k1": fe.k1, "k2": fe.k2, "d1": fe.d1, "d2": fe.d2}
         if self.element is not None:
             out["fractional"] = {"order": self.element.beta, "coeff": self.element.coeff}
         return out

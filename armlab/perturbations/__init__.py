@@ -1,5 +1,6 @@
 """Perturbation waveforms applied by the robot to the arm."""
 
+from armlab.perturbations.multisine import ForceScenario, load_force_scenario, multisine
 from armlab.perturbations.quintic import (
     PAPER_DIRECTIONS,
     QuinticPerturbation,
@@ -11,6 +12,9 @@ from armlab.perturbations.quintic import (
 )
 
 __all__ = [
+    "multisine",
+    "load_force_scenario",
+    "ForceScenario",
     "PAPER_DIRECTIONS",
     "QuinticPerturbation",
     "conditioning_ratio",

@@ -7,6 +7,15 @@ from armlab.protocols.conditioning_window import (
     simulate_protocol,
     window_specs,
 )
+from armlab.protocols.fractional_elbow import (
+    PAPER_TABLE_I,
+    FractionalRecording,
+    estimate_fractional,
+    simulate_fractional,
+    time_overlay,
+)
+from armlab.protocols.joint_frf import JOINT_BAND_HZ, fit_joint_frf
+from armlab.protocols.joint_report import fit_joint_recordings, format_joint_table, joint_frf_config
 from armlab.protocols.runner import (
     PROTOCOLS,
     format_table,
@@ -15,6 +24,16 @@ from armlab.protocols.runner import (
 )
 
 __all__ = [
+    "JOINT_BAND_HZ",
+    "PAPER_TABLE_I",
+    "FractionalRecording",
+    "estimate_fractional",
+    "fit_joint_frf",
+    "fit_joint_recordings",
+    "format_joint_table",
+    "joint_frf_config",
+    "simulate_fractional",
+    "time_overlay",
     "PAPER_THRESHOLDS_S",
     "PAPER_XI",
     "PROTOCOLS",

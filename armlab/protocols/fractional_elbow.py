@@ -13,6 +13,7 @@ model are scored against the simulated ground truth. Pure computation: files are
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -22,6 +23,8 @@ from armlab.data.trial import TrialSet
 from armlab.errors import ConfigError, DataError, EstimationError
 from armlab.estimation.arm_tf_models import (
     LITERATURE_MODELS,
+    FiveElement,
+    bandwidth_hz,
     five_element_from_tf,
     third_order_tf,
 )
@@ -32,7 +35,7 @@ from armlab.estimation.five_element_fit import (
     fractional_five_element_sweep,
 )
 from armlab.estimation.frf import FirLowpassSpec, average_responses, design_fir_lowpass, estimate_frf
-from armlab.estimation.levy import PAPER_STRUCTURES, LevyFit, levy_fit, levy_sweep
+from armlab.estimation.levy import PAPER_STRUCTURES, LevyFit, alpha_grid, levy_fit, levy_sweep
 from armlab.models.direct_drive_scene import DirectDriveScene, build_direct_drive_scene
 from armlab.models.elbow_truth import ElbowTruth, elbow_truth
 from armlab.perturbations.multisine import ForceScenario, load_force_scenario, multisine
@@ -136,6 +139,16 @@ def simulate_fractional(cfg: ExperimentConfig) -> FractionalRecording:
     return FractionalRecording(trials=trial_set, scenario=scenario, truth=truth, scene=scene)
 
 
+def _ffe_bandwidth(element: FiveElement, beta: float) -> float | None:
+    """-3 dB bandwidth of the fractional five-element model (None if |G| never falls 3 dB)."""
+    try:
+        return bandwidth_hz(
+            lambda ff: five_element_response(element, ff, beta), 1.0 / element.k1 + 1.0 / element.k2
+        )
+    except EstimationError:
+        return None
+
+
 def _fit_entry(fit: LevyFit, truth_g: np.ndarray | None, f: np.ndarray, G: np.ndarray) -> dict:
     m = fit.model
     out = {
@@ -173,6 +186,11 @@ def estimate_fractional(
     for key in ("f_measured", "theta_measured"):
         if key not in trials.channels:
             raise DataError(f"trials lack channel {key!r}; have {sorted(trials.channels)}")
+    if "link_length_m" not in trials.attrs:
+        raise DataError(
+            "trials lack attr 'link_length_m' (m, motor axis to handle): it converts theta/F into the "
+            "five-element model's m/N; add it to the trial file's attrs"
+        )
     fs = trials.fs_hz
     lo, hi = frf_cfg.band_hz
     if hi >= fs / 2:
@@ -211,7 +229,7 @@ def estimate_fractional(
         if structure.alpha is not None:
             fit = levy_fit(f, G, structure)
         else:
-            fit = levy_sweep(f, G, structure, alphas=np.arange(1, 20) * frf_cfg.alpha_step).best
+            fit = levy_sweep(f, G, structure, alphas=alpha_grid(frf_cfg.alpha_step)).best
         fits[key] = fit
 
     results = {
@@ -220,7 +238,12 @@ def estimate_fractional(
         "ground_truth": trials.attrs.get("ground_truth"),
         "n_trials": trials.n_trials,
         "tracking_error": np.asarray(trials.trial_meta.get("tracking_error", [])).tolist(),
-        "frf": {"n_freq": int(f.size), "band_hz": [lo, hi], "mean_coherence": float(np.mean(frf.coherence))},
+        "frf": {
+            "n_freq": int(f.size),
+            "band_hz": [lo, hi],
+            "mean_coherence": float(np.mean(frf.coherence)),
+            "settings": dataclasses.asdict(frf_cfg),
+        },
         "fir": {"taps": int(fir.taps.size), "ripple_db": fir.ripple_db, "attenuation_db": fir.attenuation_db},
         "models": {k: _fit_entry(v, truth_g, f, G) for k, v in fits.items()},
         "paper_table_I": PAPER_TABLE_I,
@@ -260,6 +283,7 @@ def estimate_fractional(
             "mad": sweep.indices[sweep.best_index].mad / L,
             "r2": sweep.indices[sweep.best_index].r2,
             "n_params": 5,  # M, k1, k2, d1, d2 (the order excluded, as alpha in Table I)
+            "bandwidth_hz": _ffe_bandwidth(sweep.best, sweep.best_beta),
         },
         "best": {k: getattr(sweep.best, k) for k in ("M", "k1", "k2", "d1", "d2")},
     }
@@ -275,7 +299,7 @@ def estimate_fractional(
             frac["rel_err"] = {n: abs(getattr(sweep.best, n) / getattr(tf, n) - 1) for n in names}
     models = {k: v.response for k, v in fits.items()}
     models["fractional_five_element"] = lambda ff: five_element_response(sweep.best, ff, sweep.best_beta) / L
-    overlay = time_overlay(force[0], theta[0], fs, models, hi)
+    overlay = time_overlay(force[0], theta[0], fs, models, (lo, hi))
     results["time_vaf_pct"] = overlay["vaf_pct"]
     series = {
         "f_hz": f,
@@ -292,14 +316,20 @@ def estimate_fractional(
 
 
 def time_overlay(
-    force: np.ndarray, theta: np.ndarray, fs: float, models: dict, band_hi_hz: float, skip_s: float = _SKIP_S
+    force: np.ndarray,
+    theta: np.ndarray,
+    fs: float,
+    models: dict,
+    band_hz: tuple[float, float],
+    skip_s: float = _SKIP_S,
 ) -> dict:
     """Each model's angle for the measured force of one trial, beside the measured angle (Fig. 5).
 
     The multisine repeats every trial length (its lines lie on the ``1 / T`` grid), so the
-    steady-state response is the periodic convolution ``irfft(G(f) rfft(F))``, band-limited to
-    ``band_hi_hz`` like the low-passed measured angle; ``skip_s`` of start-up transient (the arm
-    starts at rest) are left out of the VAF and of the returned series. Means are removed.
+    steady-state response is the periodic convolution ``irfft(G(f) rfft(F))``. Model and measured
+    angle are both limited to the fitting band ``band_hz`` (the models are not fitted, and the
+    force holds no lines, outside it); ``skip_s`` of start-up transient (the arm starts at rest)
+    are left out of the VAF and of the returned series. Means are removed.
 
     Returns:
         dict with ``t_s``, ``force_N``, ``theta_rad`` and ``models`` ({name: angle}) from
@@ -307,10 +337,11 @@ def time_overlay(
     """
     n = force.size
     fk = np.fft.rfftfreq(n, 1.0 / fs)
-    keep = (fk > 0) & (fk <= band_hi_hz)
+    keep = (fk >= band_hz[0]) & (fk <= band_hz[1])
     spectrum = np.fft.rfft(force - force.mean())
     i0 = int(round(skip_s * fs))
-    y = theta[i0:] - theta[i0:].mean()
+    y = np.fft.irfft(np.where(keep, np.fft.rfft(theta), 0.0), n)[i0:]
+    y = y - y.mean()
     out = {"t_s": np.arange(i0, n) / fs, "force_N": force[i0:], "theta_rad": y, "models": {}, "vaf_pct": {}}
     for name, response in models.items():
         g = np.zeros(fk.size, dtype=complex)

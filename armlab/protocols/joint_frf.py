@@ -7,7 +7,8 @@ recordings, ``armlab.data.reklab``). Two orientations of the same measurement:
 - **impedance** ``Z = -torque / position`` (N·m/rad; the minus makes ``I s² + B s + K`` positive,
   see the importer's docstring): the integer model ``I s² + B s + K`` and the fractional
   ``I s² + B s^alpha + K`` (a springpot in place of the damper), ``alpha`` swept over the paper's
-  grid (steps of ``frf.alpha_step`` in ``]0, 2[``) and chosen by the complex MSE (the phase is
+  grid (steps of ``frf.alpha_step``) up to 1 — a springpot lies between a spring (0) and a damper
+  (1); above 1 it trades places with the inertia — and chosen by the complex MSE (the phase is
   where a fractional order shows; the magnitude alone cannot tell a springpot from a damper) among
   the fits with positive I, B and K;
 - **admittance** ``Y = position / -torque`` (rad/(N·m)), the orientation of the paper's
@@ -27,7 +28,15 @@ import numpy as np
 from armlab.config.schema import FrfConfig
 from armlab.errors import ConfigError, DataError, EstimationError
 from armlab.estimation.frf import estimate_frf
-from armlab.estimation.levy import PAPER_STRUCTURES, LevyFit, LevyStructure, fit_indices, levy_fit, levy_sweep
+from armlab.estimation.levy import (
+    PAPER_STRUCTURES,
+    LevyFit,
+    LevyStructure,
+    alpha_grid,
+    fit_indices,
+    levy_fit,
+    levy_sweep,
+)
 
 __all__ = ["JOINT_BAND_HZ", "fit_joint_frf"]
 
@@ -55,13 +64,13 @@ def _impedance(f: np.ndarray, Z: np.ndarray, step: float) -> tuple[dict, dict]:
     """Integer and fractional ``I s² + B s^alpha + K`` fits of an impedance (N·m/rad)."""
     integer = levy_fit(f, Z, LevyStructure(num_powers=(0, 1, 2), den_powers=(), name="I s² + B s + K"), 1.0)
     n_unit = round(1.0 / step)
-    ks = [k for k in range(1, 2 * n_unit) if k != 2 * n_unit]
+    ks = list(range(1, n_unit + 1))  # springpot orders step .. 1: between spring (0) and damper (1)
     sweep = [
         levy_fit(f, Z, LevyStructure(num_powers=(0, k, 2 * n_unit), den_powers=()), alpha=1.0 / n_unit)
         for k in ks
     ]
     mse_c = np.array([fit_indices(Z, s.response(f), on="complex").mse for s in sweep])
-    # physical fits only: I, B, K > 0 (near alpha = 2 the springpot trades places with the mass)
+    # physical fits only: I, B, K > 0
     physical = np.array(
         [bool(np.all(s.model.b[[0, k, 2 * n_unit]] > 0)) for s, k in zip(sweep, ks, strict=True)]
     )
@@ -84,11 +93,11 @@ def _impedance(f: np.ndarray, Z: np.ndarray, step: float) -> tuple[dict, dict]:
     out = {
         "integer": {**params(integer, 1), "mse_complex": fit_indices(Z, integer.response(f), "complex").mse},
         "fractional": {
-            "alpha": ks[best] / n_unit,
+            "alpha": round(ks[best] / n_unit, 12),
             **params(sweep[best], ks[best]),
             "mse_complex": mse_c[best],
         },
-        "sweep": {"orders": [k / n_unit for k in ks], "mse_complex": mse_c, "physical": physical},
+        "sweep": {"orders": [round(k / n_unit, 12) for k in ks], "mse_complex": mse_c, "physical": physical},
     }
     return out, {"integer": integer.response(f), "fractional": sweep[best].response(f)}
 
@@ -136,8 +145,7 @@ def fit_joint_frf(
         if structure.alpha is not None:
             fits[key] = levy_fit(f, Y, structure)
         else:
-            alphas = np.arange(1, round(2.0 / frf.alpha_step)) * frf.alpha_step
-            fits[key] = levy_sweep(f, Y, structure, alphas=alphas).best
+            fits[key] = levy_sweep(f, Y, structure, alphas=alpha_grid(frf.alpha_step)).best
     entries = {k: _entry(v) for k, v in fits.items()}
     # integer: the structures of fixed order (27, A, B); fractional: those with an alpha sweep
     integer = [k for k, st in PAPER_STRUCTURES.items() if st.alpha is not None]
@@ -152,8 +160,8 @@ def fit_joint_frf(
         "impedance": imp,
         "admittance": {
             "models": entries,
-            "best_integer": min(integer, key=lambda k: entries[k]["mse"]) if integer else None,
-            "best_fractional": min(fractional, key=lambda k: entries[k]["mse"]) if fractional else None,
+            "best_integer": min(integer, key=lambda k: entries[k]["mse"]),
+            "best_fractional": min(fractional, key=lambda k: entries[k]["mse"]),
         },
     }
     series = {

@@ -8,16 +8,16 @@ docs/results_schema.md), ``table.txt`` (the printed table) and ``bode_impedance.
 
 from __future__ import annotations
 
-import json
 from datetime import datetime
 from pathlib import Path
 
-import numpy as np
 from omegaconf import OmegaConf
 
 from armlab.config.schema import FrfConfig
+from armlab.config.store import apply_overrides
 from armlab.data.reklab import list_ankle_trials, load_ankle_trial
-from armlab.errors import ConfigError, DataError
+from armlab.errors import DataError
+from armlab.protocols._files import write_json, write_new
 from armlab.protocols.joint_frf import JOINT_BAND_HZ, fit_joint_frf
 
 __all__ = ["default_out_dir", "fit_joint_recordings", "format_joint_table", "joint_frf_config"]
@@ -26,24 +26,7 @@ __all__ = ["default_out_dir", "fit_joint_recordings", "format_joint_table", "joi
 def joint_frf_config(overrides: list[str] | None = None) -> FrfConfig:
     """Frequency-response settings for joint data: the protocol's, with the joint band by default,
     updated by ``frf.<field>=<value>`` overrides."""
-    cfg = OmegaConf.structured(FrfConfig(band_hz=JOINT_BAND_HZ))
-    for item in overrides or []:
-        key, sep, value = item.partition("=")
-        if not sep or not key.startswith("frf."):
-            raise ConfigError(f"argument {item!r} must look like frf.<field>=<value>")
-        name = key.split(".", 1)[1]
-        if name not in cfg:
-            raise ConfigError(f"unknown frf field {name!r}; valid: {sorted(cfg.keys())}")
-        try:
-            cfg[name] = OmegaConf.create({"v": value})["v"]
-        except Exception as exc:
-            raise ConfigError(f"frf.{name}={value!r}: {str(exc).splitlines()[0]}") from None
-    try:
-        return OmegaConf.to_object(cfg)
-    except ConfigError:
-        raise
-    except Exception as exc:
-        raise ConfigError(str(exc).splitlines()[0]) from None
+    return apply_overrides(FrfConfig(band_hz=JOINT_BAND_HZ), "frf", overrides)
 
 
 def _sources(source: Path) -> list[tuple[Path, str]]:
@@ -60,6 +43,8 @@ def _sources(source: Path) -> list[tuple[Path, str]]:
 def fit_joint_recordings(source: Path | str, frf: FrfConfig, out_dir: Path | str) -> dict:
     """Fit every trial of ``source`` and write the outputs into the new directory ``out_dir``."""
     out_dir = Path(out_dir)
+    if out_dir.exists() and not out_dir.is_dir():
+        raise DataError(f"{out_dir} exists and is not a directory; give a new directory for the outputs")
     if out_dir.exists() and any(out_dir.iterdir()):
         raise DataError(f"{out_dir} is not empty; armlab never overwrites results — use a new directory")
     trials, series = {}, {}
@@ -78,17 +63,9 @@ def fit_joint_recordings(source: Path | str, frf: FrfConfig, out_dir: Path | str
     from armlab import viz  # figures at the edge only
 
     results["files"] = {"bode": str(viz.plot_joint_bode(series, out_dir / "bode_impedance.png"))}
-    (out_dir / "table.txt").write_text(format_joint_table(results) + "\n")
-    (out_dir / "results.json").write_text(json.dumps(results, indent=2, default=_json_default))
+    write_new(out_dir / "table.txt", format_joint_table(results) + "\n")
+    write_json(out_dir / "results.json", results)
     return results
-
-
-def _json_default(obj):
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    if isinstance(obj, np.generic):
-        return obj.item()
-    raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
 
 
 def format_joint_table(results: dict) -> str:

@@ -13,7 +13,6 @@ every trial).
 
 from __future__ import annotations
 
-import json
 import time
 from datetime import datetime
 from pathlib import Path
@@ -22,13 +21,14 @@ import numpy as np
 from omegaconf import OmegaConf
 
 from armlab.config.schema import EstimatorConfig, ExperimentConfig, FrfConfig
-from armlab.config.store import to_experiment
+from armlab.config.store import apply_overrides, to_experiment
 from armlab.data.h5io import read_trials, write_trials
 from armlab.data.trial import TrialSet
 from armlab.errors import ConfigError, DataError
 from armlab.models.direct_drive_scene import build_direct_drive_scene
 from armlab.models.elbow_truth import elbow_truth
 from armlab.perturbations.scenario import load_scenario
+from armlab.protocols._files import write_json, write_new
 from armlab.protocols.conditioning_window import (
     estimate_protocol,
     linearisation_bias,
@@ -45,20 +45,6 @@ __all__ = [
 ]
 
 PROTOCOLS = ("conditioning_window", "fractional_elbow")
-
-
-def _json_default(obj):
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    if isinstance(obj, np.generic):
-        return obj.item()
-    raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
-
-
-def _write_json(path: Path, data: dict) -> None:
-    if path.exists():
-        raise DataError(f"{path} exists; armlab never overwrites results — use a new run directory")
-    path.write_text(json.dumps(data, indent=2, default=_json_default))
 
 
 def _save_trials(path: Path, trials: TrialSet, extra_attrs: dict) -> None:
@@ -93,7 +79,7 @@ def _run_conditioning(cfg: ExperimentConfig, out_dir: Path, config_yaml: str, ti
     t2 = time.perf_counter()
     if cfg.output.trials:
         _save_trials(out_dir / "trials.h5", trials, {"config_yaml": config_yaml, "scenario": scenario.name})
-    (out_dir / "scene.xml").write_text(rec.scene.xml)
+    write_new(out_dir / "scene.xml", rec.scene.xml)
     written = {}
     if cfg.output.figures:
         written["fig4"] = viz.plot_window_sweep(results, out_dir / "fig4_full.png", model="full")
@@ -114,13 +100,8 @@ def _fractional_outputs(out_dir: Path, trials: TrialSet, results: dict, series: 
     if cfg.output.figures:
         written["fig4"] = viz.plot_bode_fits(series, results, out_dir / "fig4_bode_fits.png")
         written["fig5"] = viz.plot_time_overlay(series, out_dir / "fig5_time_overlay.png")
-        if series.get("literature"):
-            written["fig6"] = viz.plot_bode_literature(series, out_dir / "fig6_bode_literature.png")
-    table = out_dir / "table_I.txt"
-    if table.exists():
-        raise DataError(f"{table} exists; armlab never overwrites results — use a new run directory")
-    table.write_text(viz.format_fractional_table(results) + "\n")
-    written["table"] = table
+        written["fig6"] = viz.plot_bode_literature(series, out_dir / "fig6_bode_literature.png", results)
+    written["table"] = write_new(out_dir / "table_I.txt", viz.format_fractional_table(results) + "\n")
     if cfg.output.recording:
         written["recording"] = viz.write_fractional_recording(out_dir / "trials.rrd", trials, results)
     return {k: str(v) for k, v in written.items()}
@@ -139,7 +120,7 @@ def _run_fractional(cfg: ExperimentConfig, out_dir: Path, config_yaml: str, timi
         _save_trials(
             out_dir / "trials.h5", rec.trials, {"config_yaml": config_yaml, "scenario": rec.scenario.name}
         )
-    (out_dir / "scene.xml").write_text(rec.scene.xml)
+    write_new(out_dir / "scene.xml", rec.scene.xml)
     results["files"] = _fractional_outputs(out_dir, rec.trials, results, series, cfg)
     timing["outputs_s"] = time.perf_counter() - t2
     return results
@@ -170,27 +151,13 @@ def run_protocol(cfg: ExperimentConfig, out_dir: Path, config_yaml: str = "") ->
     results = _RUNS[cfg.protocol_name](cfg, out_dir, config_yaml, timing)
     timing["total_s"] = time.perf_counter() - t0
     results["timing"] = timing
-    _write_json(out_dir / "results.json", results)
+    write_json(out_dir / "results.json", results)
     return results
 
 
-def _overrides(stored, prefix: str, schema, overrides: list[str] | None):
-    """The stored ``prefix`` config group updated by ``prefix.<field>=<value>`` overrides."""
-    cfg = OmegaConf.merge(OmegaConf.structured(schema), stored.get(prefix, {}))
-    for item in overrides or []:
-        key, sep, value = item.partition("=")
-        if not sep or not key.startswith(f"{prefix}."):
-            raise ConfigError(f"override {item!r} must look like {prefix}.<field>=<value>")
-        field = key.split(".", 1)[1]
-        if field not in cfg:
-            raise ConfigError(f"unknown {prefix} field {field!r}; valid: {sorted(cfg.keys())}")
-        cfg[field] = OmegaConf.create({"v": value})["v"] if value != "null" else None
-    try:
-        return OmegaConf.to_object(cfg)
-    except ConfigError:
-        raise
-    except Exception as exc:
-        raise ConfigError(str(exc).splitlines()[0]) from None
+def _group(schema, stored, name: str):
+    """The stored config group ``name`` on its schema (defaults for fields it lacks)."""
+    return OmegaConf.merge(OmegaConf.structured(schema), stored.get(name, {}))
 
 
 def reestimate(run_dir: Path, overrides: list[str] | None = None) -> tuple[Path, dict]:
@@ -209,14 +176,14 @@ def reestimate(run_dir: Path, overrides: list[str] | None = None) -> tuple[Path,
     stored = OmegaConf.create(trials.attrs.get("config_yaml") or "{}")
     protocol = str(trials.attrs.get("protocol", "conditioning_window"))
     if protocol == "fractional_elbow":
-        frf = _overrides(stored, "frf", FrfConfig, overrides)
+        frf = apply_overrides(_group(FrfConfig, stored, "frf"), "frf", overrides)
         truth = None
         if "elbow" in stored:  # the truth is rebuilt from the stored model settings (no simulation)
             exp = to_experiment(OmegaConf.merge(OmegaConf.structured(ExperimentConfig), stored))
             truth = elbow_truth(build_direct_drive_scene(exp.elbow, exp.sim), exp.elbow, trials.fs_hz)
         results, _ = estimate_fractional(trials, frf, truth)
     elif protocol == "conditioning_window":
-        estimator = _overrides(stored, "estimator", EstimatorConfig, overrides)
+        estimator = apply_overrides(_group(EstimatorConfig, stored, "estimator"), "estimator", overrides)
         scenario = load_scenario(str(trials.attrs.get("scenario", "conditioning_window")))
         groups = sorted(set(np.asarray(trials.trial_meta["group"]).tolist()))
         scenario = scenario.subset(k_values=groups, n_trials=None)
@@ -225,7 +192,7 @@ def reestimate(run_dir: Path, overrides: list[str] | None = None) -> tuple[Path,
         raise DataError(f"{path} holds trials of protocol {protocol!r}; valid: {list(PROTOCOLS)}")
     out = run_dir / f"reestimate_{datetime.now():%Y-%m-%d_%H-%M-%S-%f}"
     out.mkdir()
-    _write_json(out / "results.json", results)
+    write_json(out / "results.json", results)
     return out, results
 
 

@@ -1,5 +1,7 @@
 """Simulation: the held posture, robot IK, batched rollout with reflexes, the simulated lab."""
 
+from armlab.sim.force_control import ForceTrial, simulate_force_trial
+from armlab.sim.fractional import FractionalElement, oustaloup_zpk
 from armlab.sim.hold import (
     HoldState,
     preload_activations,
@@ -19,6 +21,10 @@ from armlab.sim.rollout import (
 )
 
 __all__ = [
+    "oustaloup_zpk",
+    "FractionalElement",
+    "simulate_force_trial",
+    "ForceTrial",
     "HoldState",
     "LabRecording",
     "SimResult",

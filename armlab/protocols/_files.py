@@ -1,0 +1,36 @@
+"""Writing run outputs that never overwrite anything (shared by the protocol edges)."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from armlab.errors import DataError
+
+__all__ = ["json_default", "write_json", "write_new"]
+
+
+def json_default(obj):
+    """JSON encoding of NumPy arrays and scalars."""
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, np.generic):
+        return obj.item()
+    raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
+
+
+def write_new(path: Path, text: str) -> Path:
+    """Write a text file that must not exist yet (armlab never overwrites results)."""
+    try:
+        with Path(path).open("x") as fh:
+            fh.write(text)
+    except FileExistsError:
+        raise DataError(f"{path} exists; armlab never overwrites results — use a new run directory") from None
+    return Path(path)
+
+
+def write_json(path: Path, data: dict) -> Path:
+    """``data`` as indented JSON in a new file."""
+    return write_new(path, json.dumps(data, indent=2, default=json_default))
