@@ -353,6 +353,20 @@ class FrfConfig:
             f"got {self.alpha_step}",
         )
 
+    def check_recording(self, fs_hz: float, n_samples: int, what: str = "trial") -> None:
+        """Reject settings the recording cannot support: a band at or beyond Nyquist, a Welch
+        window longer than the record."""
+        lo, hi = self.band_hz
+        _check(
+            hi < fs_hz / 2,
+            f"frf.band_hz upper edge {hi} Hz is at or beyond Nyquist ({fs_hz / 2} Hz); valid: < {fs_hz / 2}",
+        )
+        _check(
+            self.welch_window <= n_samples,
+            f"frf.welch_window = {self.welch_window} samples is longer than the {what} "
+            f"({n_samples} samples); valid: <= {n_samples}",
+        )
+
 
 @dataclass(kw_only=True)
 class OutputConfig:

@@ -171,6 +171,22 @@ class LevyFit:
     def alpha(self) -> float:
         return self.model.alpha
 
+    def summary(self) -> dict:
+        """Plain-dict record of the fit (coefficients, order, indices, bandwidth) for results files."""
+        m = self.model
+        return {
+            "structure": self.structure.name,
+            "alpha": float(m.alpha),
+            "b": np.asarray(m.b).tolist(),
+            "a": np.asarray(m.a).tolist(),
+            "mse": self.indices.mse,
+            "mad": self.indices.mad,
+            "r2": self.indices.r2,
+            "n_params": self.n_params,
+            "bandwidth_hz": self.bandwidth_hz,
+            "stable": bool(self.stable),
+        }
+
     def response(self, f_hz: np.ndarray) -> np.ndarray:
         """Model frequency response at ``f_hz`` (Hz), complex, same shape."""
         return self.model.response(f_hz)

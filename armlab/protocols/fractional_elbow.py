@@ -150,19 +150,7 @@ def _ffe_bandwidth(element: FiveElement, beta: float) -> float | None:
 
 
 def _fit_entry(fit: LevyFit, truth_g: np.ndarray | None, f: np.ndarray, G: np.ndarray) -> dict:
-    m = fit.model
-    out = {
-        "structure": fit.structure.name,
-        "alpha": float(m.alpha),
-        "b": np.asarray(m.b).tolist(),
-        "a": np.asarray(m.a).tolist(),
-        "mse": fit.indices.mse,
-        "mad": fit.indices.mad,
-        "r2": fit.indices.r2,
-        "n_params": fit.n_params,
-        "bandwidth_hz": fit.bandwidth_hz,
-        "stable": bool(fit.stable),
-    }
+    out = fit.summary()
     if truth_g is not None:  # the fit against the true response on the same band
         err = np.abs(fit.response(f)) - np.abs(truth_g)
         out["rel_rms_error_vs_truth"] = float(np.sqrt(np.mean(err**2) / np.mean(np.abs(truth_g) ** 2)))
@@ -192,16 +180,8 @@ def estimate_fractional(
             "five-element model's m/N; add it to the trial file's attrs"
         )
     fs = trials.fs_hz
+    frf_cfg.check_recording(fs, trials.n_samples, "trial")
     lo, hi = frf_cfg.band_hz
-    if hi >= fs / 2:
-        raise ConfigError(
-            f"frf.band_hz upper edge {hi} Hz is at or beyond Nyquist ({fs / 2} Hz); valid: < {fs / 2}"
-        )
-    if frf_cfg.welch_window > trials.n_samples:
-        raise ConfigError(
-            f"frf.welch_window = {frf_cfg.welch_window} samples is longer than the trial "
-            f"({trials.n_samples} samples); valid: <= {trials.n_samples}"
-        )
     fir = design_fir_lowpass(
         FirLowpassSpec(
             pass_hz=frf_cfg.fir_pass_hz,

@@ -45,21 +45,6 @@ __all__ = ["JOINT_BAND_HZ", "fit_joint_frf"]
 JOINT_BAND_HZ = (0.5, 40.0)
 
 
-def _entry(fit: LevyFit) -> dict:
-    m = fit.model
-    return {
-        "alpha": float(m.alpha),
-        "b": np.asarray(m.b).tolist(),
-        "a": np.asarray(m.a).tolist(),
-        "mse": fit.indices.mse,
-        "mad": fit.indices.mad,
-        "r2": fit.indices.r2,
-        "n_params": fit.n_params,
-        "bandwidth_hz": fit.bandwidth_hz,
-        "stable": bool(fit.stable),
-    }
-
-
 def _impedance(f: np.ndarray, Z: np.ndarray, step: float) -> tuple[dict, dict]:
     """Integer and fractional ``I s² + B s^alpha + K`` fits of an impedance (N·m/rad)."""
     integer = levy_fit(f, Z, LevyStructure(num_powers=(0, 1, 2), den_powers=(), name="I s² + B s + K"), 1.0)
@@ -123,16 +108,8 @@ def fit_joint_frf(
     torque = np.asarray(torque, dtype=float)
     if position.ndim != 1 or position.shape != torque.shape:
         raise DataError(f"position and torque must be equal 1-D arrays, got {position.shape}, {torque.shape}")
+    frf.check_recording(fs_hz, position.size, "recording")
     lo, hi = frf.band_hz
-    if hi >= fs_hz / 2:
-        raise ConfigError(
-            f"frf.band_hz upper edge {hi} Hz is at or beyond Nyquist ({fs_hz / 2} Hz); valid: < {fs_hz / 2}"
-        )
-    if frf.welch_window > position.size:
-        raise ConfigError(
-            f"frf.welch_window = {frf.welch_window} samples is longer than the recording "
-            f"({position.size} samples); valid: <= {position.size}"
-        )
     response = estimate_frf(position, -torque, fs_hz, window_len=frf.welch_window, overlap=frf.welch_overlap)
     band = response.band(lo, hi)
     f, Z = band.f_hz, band.G
@@ -146,7 +123,7 @@ def fit_joint_frf(
             fits[key] = levy_fit(f, Y, structure)
         else:
             fits[key] = levy_sweep(f, Y, structure, alphas=alpha_grid(frf.alpha_step)).best
-    entries = {k: _entry(v) for k, v in fits.items()}
+    entries = {k: v.summary() for k, v in fits.items()}
     # integer: the structures of fixed order (27, A, B); fractional: those with an alpha sweep
     integer = [k for k, st in PAPER_STRUCTURES.items() if st.alpha is not None]
     fractional = [k for k, st in PAPER_STRUCTURES.items() if st.alpha is None]
