@@ -1,5 +1,6 @@
 """Loading and composing the MJCF models, analytic arm kinematics, and ground truth."""
 
+from armlab.models.capstan_robot import TABLE_VI_ALPHA, CapstanDynamics, CapstanParameters
 from armlab.models.direct_drive_scene import ELBOW_MUSCLES, DirectDriveScene, build_direct_drive_scene
 from armlab.models.elbow_truth import ElbowTruth, elbow_truth
 from armlab.models.ground_truth import (
@@ -18,8 +19,29 @@ from armlab.models.scene import (
     build_scene,
     model_file,
 )
+from armlab.models.spring_array import (
+    TABLE_I_PAYLOADS_KG,
+    TABLE_I_STIFFNESS,
+    Spring,
+    SpringArray,
+    StiffnessField,
+    design_spring_array,
+    fixture_mjcf,
+    table_i_array,
+)
 
 __all__ = [
+    "table_i_array",
+    "fixture_mjcf",
+    "design_spring_array",
+    "StiffnessField",
+    "SpringArray",
+    "Spring",
+    "TABLE_I_STIFFNESS",
+    "TABLE_I_PAYLOADS_KG",
+    "CapstanParameters",
+    "CapstanDynamics",
+    "TABLE_VI_ALPHA",
     "elbow_truth",
     "ElbowTruth",
     "build_direct_drive_scene",
