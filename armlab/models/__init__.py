@@ -18,6 +18,7 @@ from armlab.models.scene import (
     Scene,
     build_scene,
     model_file,
+    named_id,
 )
 from armlab.models.spring_array import (
     TABLE_I_PAYLOADS_KG,
@@ -31,6 +32,7 @@ from armlab.models.spring_array import (
 )
 
 __all__ = [
+    "named_id",
     "table_i_array",
     "fixture_mjcf",
     "design_spring_array",

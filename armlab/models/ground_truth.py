@@ -17,7 +17,7 @@ import mujoco
 import numpy as np
 
 from armlab.errors import ModelError
-from armlab.models.scene import Scene
+from armlab.models.scene import Scene, named_id
 
 __all__ = [
     "GroundTruth",
@@ -120,18 +120,17 @@ def base_inertial_parameters(scene: Scene, rigid_cuff: bool) -> np.ndarray:
     model = scene.model
     forearm = model.site_bodyid[scene.hand_site]
     upper = model.body_parentid[forearm]
-    m1, s1, j1 = _composite(model, _welded_subtree(model, upper)[:1], upper)
+    _, s1, j1 = _composite(model, [upper], upper)  # the upper arm alone (its subtree holds the forearm)
     m2, s2, j2 = _composite(model, _welded_subtree(model, forearm), forearm)
     if abs(s1[1]) > 1e-9 or abs(s2[1]) > 1e-9:
         raise ModelError("arm segments must have their centres of mass on the link axes (x)")
     if rigid_cuff:
         for name in ("lwr/cuff/ft_sensor", "lwr/cuff/mount"):
-            b = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_BODY, name)
+            b = named_id(model, mujoco.mjtObj.mjOBJ_BODY, name)
             m = float(model.body_mass[b])
             m2 += m
             s2 = s2 + m * np.array([scene.l2, 0.0, 0.0])
             j2 += m * scene.l2**2
-    del m1
     return np.array([j1 + j2 + m2 * scene.l1**2, scene.l1 * s2[0], j2])
 
 

@@ -15,7 +15,7 @@ import mujoco
 import numpy as np
 
 from armlab.errors import ModelError
-from armlab.models.scene import Scene
+from armlab.models.scene import Scene, named_id
 
 __all__ = [
     "RobotKinematics",
@@ -71,7 +71,7 @@ class RobotKinematics:
         parent = model.body_parentid[bodies[0]]
         last = bodies[-1]
         r_last = data.xmat[last].reshape(3, 3)
-        site_ft = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, "lwr/cuff/ft_site")
+        site_ft = named_id(model, mujoco.mjtObj.mjOBJ_SITE, "lwr/cuff/ft_site")
         return cls(
             base_pos=data.xpos[parent].copy(),
             base_rot=data.xmat[parent].reshape(3, 3).copy(),

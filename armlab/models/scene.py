@@ -21,6 +21,7 @@ os.environ.setdefault("MUJOCO_GL", "egl")  # dm_control imports a renderer; none
 from dm_control import mjcf  # noqa: E402
 
 __all__ = [
+    "named_id",
     "MODELS_DIR",
     "MUSCLES",
     "Scene",
@@ -141,6 +142,15 @@ def _compose(arm: ArmConfig, cuff: CuffConfig, robot: RobotConfig, sim: SimConfi
     root.sensor.add("framepos", name="p_flange", objtype="site", objname=flange)
     root.sensor.add("framepos", name="p_contact", objtype="site", objname=contact)
     return root
+
+
+def named_id(model: mujoco.MjModel, objtype: mujoco.mjtObj, name: str) -> int:
+    """Id of a named model element; a clear :class:`ModelError` instead of MuJoCo's silent -1."""
+    i = mujoco.mj_name2id(model, objtype, name)
+    if i < 0:
+        kind = str(objtype).split(".")[-1].removeprefix("mjOBJ_").lower()
+        raise ModelError(f"the model has no {kind} named {name!r}")
+    return int(i)
 
 
 def build_scene(arm: ArmConfig, cuff: CuffConfig, robot: RobotConfig, sim: SimConfig) -> Scene:

@@ -5,7 +5,8 @@ Each 1/fs control period the controller reads the encoder and the handle force s
     tau = tau_Dym + L (F_ref + kp e + ki int(e) + kd de/dt),     e = F_ref - F_measured,
     tau_Dym = M_hat theta_dd + C_hat theta_d + B_hat sign(theta_d)           (Eqs. (20), (21))
 
-with theta_d, theta_dd from low-passed differences of the encoder, and commands the current
+with theta_d from low-passed differences of the encoder and theta_dd from the JR3's accelerometer
+(tangential axis, read one control period late), and commands the current
 ``I_C = tau / K_torque`` (Eq. (19)) through a 16-bit reference. The elbow's muscles receive their
 co-contraction plus the delayed stretch reflex, or the fractional element its torque. A trial
 whose motor angle leaves the safety range fails with :class:`SimulationError`.
@@ -94,8 +95,10 @@ def simulate_force_trial(
         fs_hz: Hz, control and sample rate; a whole number of physics steps per period.
         settle_s: s, unrecorded hold before the reference starts.
         elbow, reflex, motor: the subject and the controller.
-        force_spec, encoder_spec: sensor imperfections used online (noise, bias, drift,
-            quantisation; the sensors' filters and delays are not modelled in the loop).
+        force_spec, encoder_spec: sensor imperfections used online: noise, bias and quantisation,
+            plus drift for the force sensor (an encoder counts position and does not drift, so
+            ``encoder_spec.drift_per_s`` is not used); the sensors' filters and delays are not
+            modelled in the loop.
         rng: source of the sensor noise.
 
     Returns:

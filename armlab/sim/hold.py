@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import mujoco
 import numpy as np
+from mujoco import rollout
 
 from armlab.config.schema import ArmConfig
 from armlab.errors import ConfigError
@@ -112,7 +113,6 @@ def settle(scene: Scene, arm: ArmConfig, duration_s: float) -> HoldState:
     state0 = np.empty(mujoco.mj_stateSize(model, spec))
     mujoco.mj_getState(model, data, state0, spec)
     nstep = int(round(duration_s / model.opt.timestep))
-    from mujoco import rollout  # local: keeps import cost out of module import
 
     states, _ = rollout.rollout(model, data, state0[None], ctrl[None, None, :], nstep=nstep)
     final = states[0, -1].copy()

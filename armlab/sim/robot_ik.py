@@ -13,7 +13,7 @@ import mujoco
 import numpy as np
 
 from armlab.errors import ModelError
-from armlab.models.scene import Scene
+from armlab.models.scene import Scene, named_id
 
 __all__ = [
     "FLANGE_DOWN",
@@ -37,7 +37,7 @@ def nominal_robot_posture(scene: Scene, target: np.ndarray) -> np.ndarray:
     """
     data = mujoco.MjData(scene.model)
     mujoco.mj_kinematics(scene.model, data)
-    link1 = data.xpos[mujoco.mj_name2id(scene.model, mujoco.mjtObj.mjOBJ_BODY, "lwr/lwr_link1")]
+    link1 = data.xpos[named_id(scene.model, mujoco.mjtObj.mjOBJ_BODY, "lwr/lwr_link1")]
     d = target - link1
     yaw = float(np.arctan2(d[1], d[0]))
     # j2 about -y leans forward for negative angles in the base's turned frame; start bent

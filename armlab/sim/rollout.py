@@ -9,6 +9,7 @@ This is exact (no approximation of the delay) and keeps Python out of the per-st
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 
 import mujoco
@@ -116,9 +117,8 @@ def simulate(
         tuple(np.arange(scene.sensors[f"vel_{m}"].start, scene.sensors[f"vel_{m}"].stop) for m in MUSCLES)
     ]
 
-    data = [mujoco.MjData(model) for _ in range(nthread or 2)]
+    data = [mujoco.MjData(model) for _ in range(nthread or os.cpu_count() or 1)]
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
-    data[0].qpos[:] = 0
     mujoco.mj_setState(model, data[0], initial_state, spec)
     mujoco.mj_forward(model, data[0])
     ref_len = data[0].sensordata[len_sl].copy()

@@ -164,8 +164,6 @@ def plot_window_sweep(
     windows = _windows(results)
     parts = [_model_part(w, model) for w in windows]
     x_ms = 1e3 * np.array([float(w["t_obs_s"]) for w in windows])
-    k_names = [f"K{i + 1}{j + 1}" for i, j in _MATRIX_ENTRIES]
-    d_names = [f"D{i + 1}{j + 1}" for i, j in _MATRIX_ENTRIES]
 
     def flat(m: np.ndarray) -> np.ndarray:
         return m.reshape(len(m), 4)
@@ -179,23 +177,15 @@ def plot_window_sweep(
             ax.semilogy(x_ms, _series(parts, "cond", ()), "ko-", ms=3.5, lw=1.2, label="cond(W)")
             ax.set_ylabel("cond(W)")
             ax.grid(True, which="both", alpha=0.3)
-        elif panel == "K":
+        elif panel in ("K", "D"):
+            unit = "N·m/rad" if panel == "K" else "N·m·s/rad"
             _entry_panel(
                 ax,
                 x_ms,
-                flat(_series(parts, "K", (2, 2))),
-                flat(_truth(results, windows, "K", (2, 2))),
-                k_names,
-                "K [N·m/rad]",
-            )
-        elif panel == "D":
-            _entry_panel(
-                ax,
-                x_ms,
-                flat(_series(parts, "D", (2, 2))),
-                flat(_truth(results, windows, "D", (2, 2))),
-                d_names,
-                "D [N·m·s/rad]",
+                flat(_series(parts, panel, (2, 2))),
+                flat(_truth(results, windows, panel, (2, 2))),
+                [f"{panel}{i + 1}{j + 1}" for i, j in _MATRIX_ENTRIES],
+                f"{panel} [{unit}]",
             )
         elif panel == "xi":
             _entry_panel(
