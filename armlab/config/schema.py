@@ -346,12 +346,15 @@ class FrfConfig:
         _check(0 <= self.welch_overlap < 1, f"frf.welch_overlap must lie in [0, 1), got {self.welch_overlap}")
         lo, hi = self.band_hz
         _check(0 <= lo < hi, f"frf.band_hz must be (low, high) with 0 <= low < high, got {(lo, hi)}")
-        n_unit = round(1.0 / self.alpha_step) if 0 < self.alpha_step < 1 else 0
-        _check(
-            n_unit >= 2 and abs(n_unit * self.alpha_step - 1.0) < 1e-9,
-            f"frf.alpha_step must divide 1 so that alpha = 1 is on the grid (e.g. 0.1, 0.05, 0.25, 0.5), "
-            f"got {self.alpha_step}",
-        )
+        from armlab.estimation.levy import alpha_grid  # the one grid rule (local: config stays light)
+
+        try:
+            alpha_grid(self.alpha_step)
+        except ConfigError:
+            raise ConfigError(
+                "frf.alpha_step must divide 1 so that alpha = 1 is on the grid (e.g. 0.1, 0.05, 0.25, 0.5), "
+                f"got {self.alpha_step}"
+            ) from None
 
     def check_recording(self, fs_hz: float, n_samples: int, what: str = "trial") -> None:
         """Reject settings the recording cannot support: a band at or beyond Nyquist, a Welch

@@ -163,10 +163,9 @@ def fractional_five_element_sweep(
         betas = alpha_grid(step)
     except ConfigError as exc:
         raise EstimationError(str(exc)) from None
-    n_unit = round(1.0 / step)
     elements: list[FiveElement | None] = [None] * betas.size
     cost = np.full(betas.size, np.inf)
-    i1 = n_unit - 1  # index of beta = 1
+    i1 = int(np.flatnonzero(np.isclose(betas, 1.0))[0])  # the grid holds beta = 1
     for order in (range(i1, -1, -1), range(i1, betas.size)):  # continue down, then up, from beta = 1
         prev = start
         for i in order:

@@ -23,6 +23,7 @@ which reproduces Table I for (28), (29), A and B; for (27) it gives 6 where Tabl
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Literal
@@ -152,24 +153,39 @@ class LevyFit:
         model: the fitted :class:`CommensurateTF` (coefficients ascending in ``s^alpha``).
         structure: the free-coefficient pattern that was fitted.
         indices: Eqs. (24)-(26) on the fitting band.
-        n_params: number of free coefficients (Table I's "# param").
-        bandwidth_hz: Hz, -3 dB bandwidth of :attr:`model`; None when ``|G|`` does not fall 3 dB
-            below its low-frequency value up to 1 kHz (or has no finite low-frequency value).
-        stable: whether :attr:`model` is stable (Matignon's condition).
         n_freq: number of frequencies fitted.
+
+    Derived: ``n_params`` (Table I's "# param"), ``stable`` (Matignon's condition) and
+    ``bandwidth_hz`` (computed once, on first use: sweeps discard most fits unread).
     """
 
     model: CommensurateTF
     structure: LevyStructure
     indices: FitIndices
-    n_params: int
-    bandwidth_hz: float | None
-    stable: bool
     n_freq: int
 
     @property
     def alpha(self) -> float:
         return self.model.alpha
+
+    @property
+    def n_params(self) -> int:
+        """Number of free coefficients (Table I's "# param")."""
+        return self.structure.n_params
+
+    @property
+    def stable(self) -> bool:
+        """Whether :attr:`model` is stable (Matignon's condition)."""
+        return self.model.is_stable
+
+    @functools.cached_property
+    def bandwidth_hz(self) -> float | None:
+        """Hz, -3 dB bandwidth of :attr:`model`; None when ``|G|`` does not fall 3 dB below its
+        low-frequency value up to 1 kHz (or has no finite low-frequency value)."""
+        try:
+            return self.model.bandwidth_hz()
+        except EstimationError:
+            return None
 
     def summary(self) -> dict:
         """Plain-dict record of the fit (coefficients, order, indices, bandwidth) for results files."""
@@ -285,17 +301,10 @@ def levy_fit(
         a = np.zeros(max(den, default=0) + 1)
         b[num], a[0], a[den] = x[: len(num)], 1.0, x[len(num) :]
         model = CommensurateTF(b=b, a=a, alpha=alpha, name=structure.name)
-    try:
-        bw: float | None = model.bandwidth_hz()
-    except EstimationError:
-        bw = None
     return LevyFit(
         model=model,
         structure=structure,
         indices=fit_indices(G, model.response(f), on=indices_on),
-        n_params=structure.n_params,
-        bandwidth_hz=bw,
-        stable=model.is_stable,
         n_freq=int(f.size),
     )
 

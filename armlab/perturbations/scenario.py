@@ -138,11 +138,11 @@ def load_scenario(name: str) -> Scenario:
     if directions.ndim != 2 or directions.shape[1] != 2 or not np.all(np.isfinite(directions)):
         raise ConfigError(f"{path.name}: directions_rad must be a list of [dq1, dq2] pairs in rad")
     interp = _need(raw, "interpolation", path)
-    k_lo, k_hi = (int(v) for v in interp["k"])
+    k_lo, k_hi = (int(v) for v in _need(interp, "k", path))
     if not (1 <= k_lo <= k_hi):
         raise ConfigError(f"{path.name}: interpolation.k must be [first, last] with 1 <= first <= last")
     k = np.arange(k_lo, k_hi + 1)
-    t_k = float(interp["base_s"]) + k * float(interp["step_s"])
+    t_k = float(_need(interp, "base_s", path)) + k * float(_need(interp, "step_s", path))
     if np.any(t_k <= 0):
         raise ConfigError(f"{path.name}: interpolation times must be positive, got {t_k.min()} s")
     wait = tuple(float(v) for v in _need(raw, "wait_s", path))

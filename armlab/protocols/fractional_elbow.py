@@ -23,11 +23,12 @@ from armlab.data.trial import TrialSet
 from armlab.errors import ConfigError, DataError, EstimationError
 from armlab.estimation.arm_tf_models import (
     LITERATURE_MODELS,
+    CommensurateTF,
     FiveElement,
     bandwidth_hz,
     five_element_from_tf,
-    third_order_tf,
 )
+from armlab.estimation.criteria import relative_error
 from armlab.estimation.five_element_fit import (
     best_five_element,
     five_element_guesses,
@@ -149,11 +150,10 @@ def _ffe_bandwidth(element: FiveElement, beta: float) -> float | None:
         return None
 
 
-def _fit_entry(fit: LevyFit, truth_g: np.ndarray | None, f: np.ndarray, G: np.ndarray) -> dict:
+def _fit_entry(fit: LevyFit, truth_g: np.ndarray | None, f: np.ndarray) -> dict:
     out = fit.summary()
-    if truth_g is not None:  # the fit against the true response on the same band
-        err = np.abs(fit.response(f)) - np.abs(truth_g)
-        out["rel_rms_error_vs_truth"] = float(np.sqrt(np.mean(err**2) / np.mean(np.abs(truth_g) ** 2)))
+    if truth_g is not None:  # |fit| against |truth| on the same band, relative RMS
+        out["rel_rms_error_vs_truth"] = relative_error(np.abs(fit.response(f)), np.abs(truth_g))
     return out
 
 
@@ -225,16 +225,14 @@ def estimate_fractional(
             "settings": dataclasses.asdict(frf_cfg),
         },
         "fir": {"taps": int(fir.taps.size), "ripple_db": fir.ripple_db, "attenuation_db": fir.attenuation_db},
-        "models": {k: _fit_entry(v, truth_g, f, G) for k, v in fits.items()},
+        "models": {k: _fit_entry(v, truth_g, f) for k, v in fits.items()},
         "paper_table_I": PAPER_TABLE_I,
         "literature_bandwidth_hz": {name: tf.bandwidth_hz() for name, tf in LITERATURE_MODELS.items()},
     }
     L = float(trials.attrs["link_length_m"])
     m27 = fits["27"].model
     # theta/F (rad/N) -> handle displacement per force (m/N): multiply by L
-    t27 = third_order_tf(
-        a3=m27.a[3], a2=m27.a[2], a1=m27.a[1], b2=m27.b[2] * L, b1=m27.b[1] * L, b0=m27.b[0] * L
-    )
+    t27 = CommensurateTF(b=m27.b * L, a=m27.a, name="(27)", units="m/N")
     G_m = G * L
     try:  # the reading of model (27) is the paper's start; a shape-based guess when it has none
         start = five_element_from_tf(t27)
