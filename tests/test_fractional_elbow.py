@@ -40,7 +40,7 @@ def five_element_run():
 def test_third_order_model_recovers_the_five_elements(five_element_run):
     _, _, results = five_element_run
     err = results["five_element_rel_err"]
-    # the 5 %; measured M 1.8, k1 0.4, k2 0.6, d1 4.4, d2 0.5 % (d1, the grasp damper,
+    # the 5 %; measured M 0.6, k1 0.3, k2 0.8, d1 3.3, d2 1.0 % (d1, the grasp damper,
     # shows mostly above the 9 Hz grasp mode and is the least determined)
     assert max(err.values()) < 0.05, err
 
@@ -50,8 +50,8 @@ def test_table_I_structures_are_fitted_with_the_papers_indices(five_element_run)
     models = results["models"]
     assert set(models) == {"27", "28", "29", "A", "B"}
     assert models["27"]["alpha"] == 1.0 and models["27"]["r2"] > 0.98
-    for key in ("28", "29"):
-        assert 0 < models[key]["alpha"] < 2
+    # the 4-parameter fractional (28) beats the 3-parameter (29) (measured R² 0.986 vs 0.858)
+    assert models["28"]["r2"] > models["29"]["r2"]
     # integer 3rd order beats the 2-pole models, as in Table I
     assert models["27"]["mse"] < models["A"]["mse"]
     assert results["frf"]["n_freq"] == 134  # 0.12-15 Hz on the 2 kHz / 18000 grid
@@ -89,7 +89,7 @@ def test_fractional_truth_gives_the_true_order(fractional_run):
     # springpot coefficient, arm and grasp at the chosen order (measured <= 6 %)
     assert max(frac["rel_err"].values()) < 0.1, frac["rel_err"]
     # the integer five-element model is a worse description of a fractional arm
-    assert min(frac["cost"]) < 0.5 * frac["cost"][9]
+    assert min(frac["cost"]) < 0.5 * frac["cost"][list(frac["orders"]).index(1.0)]  # measured 2.6x
 
 
 @pytest.mark.slow

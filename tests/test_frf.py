@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
@@ -98,8 +100,12 @@ def test_paper_settings_and_averaging():
     band = frf.band(0.12, 15.0)
     assert band.f_hz.size == 134
     assert_allclose(band.G, 0.5 + 0.5 * np.exp(-2j * np.pi * band.f_hz / fs), rtol=2e-3)
-    mean = average_responses([band, band])
-    assert_allclose(mean.G, band.G) and mean.n_segments == 42
+    other = replace(band, G=2.0 * band.G, coherence=0.5 * band.coherence)
+    mean = average_responses([band, other])
+    assert mean.n_segments == 42
+    # the documented arithmetic mean of G and of the coherence
+    assert_allclose(mean.G, 1.5 * band.G, rtol=1e-12)
+    assert_allclose(mean.coherence, 0.75 * band.coherence, rtol=1e-12)
     with pytest.raises(DataError, match="share one frequency grid"):
         average_responses([band, frf])
 

@@ -35,19 +35,26 @@ def test_impedance_parameters_and_order_are_recovered(alpha):
     res, series = fit_joint_frf(position, torque, FS, FrfConfig(band_hz=JOINT_BAND_HZ), "synthetic")
     frac = res["impedance"]["fractional"]
     assert frac["alpha"] == pytest.approx(alpha, abs=0.1 + 1e-9)
-    assert frac["I"] == pytest.approx(I, rel=0.05)
-    assert frac["K"] == pytest.approx(K, rel=0.05)
-    assert frac["r2"] > 0.99
+    # 5 % torque noise; measured errors I 0.06 %, K <= 0.06 %, B 1.1 % (alpha 0.6), R² 0.9998
+    assert frac["I"] == pytest.approx(I, rel=0.01)
+    assert frac["K"] == pytest.approx(K, rel=0.01)
+    assert frac["B"] == pytest.approx(B, rel=0.03)
+    assert frac["r2"] > 0.999
     if alpha == 1.0:
         integer = res["impedance"]["integer"]
         for name, true in (("I", I), ("B", B), ("K", K)):
-            assert integer[name] == pytest.approx(true, rel=0.05), name
+            assert integer[name] == pytest.approx(true, rel=0.01), name
     else:  # a springpot is not a damper: the integer model fits the complex response worse
         assert res["impedance"]["integer"]["mse_complex"] > 1.2 * frac["mse_complex"]  # measured 1.37
     adm = res["admittance"]
     assert set(adm["models"]) == {"27", "28", "29", "A", "B"}
-    assert adm["best_integer"] in ("27", "A", "B") and adm["best_fractional"] in ("28", "29")
-    assert np.allclose(series["Y"], 1 / series["Z"])
+    # the admittance fits describe 1/(I s² + B s^alpha + K): measured R² of (27) 0.94 (alpha 0.6,
+    # Levy's equation error weights the stiff band) and 0.997 (alpha 1)
+    assert adm["models"]["27"]["r2"] > 0.9
+    if alpha == 1.0:  # (27) contains the true admittance: measured 0.7 % from it
+        s = 2j * np.pi * series["f_hz"]
+        true_y = 1 / (I * s**2 + B * s + K)
+        assert np.linalg.norm(series["Y_fits"]["27"] - true_y) / np.linalg.norm(true_y) < 0.02
 
 
 def test_bad_input_is_rejected():
@@ -64,12 +71,14 @@ def test_bad_input_is_rejected():
 
 @pytest.mark.skipif(not list_ankle_trials(), reason=f"no REKLAB data at {DEFAULT_REKLAB_ROOT}")
 def test_real_ankle_trials_get_physical_fits():
-    """Measured (0.5-40 Hz): integer I 0.016-0.019 kg m², K 56-198 N m/rad, R² 0.97-0.99."""
+    """Measured (0.5-40 Hz): integer I 0.016-0.019 kg m², K 56-198 N m/rad, R² 0.973-0.993;
+    fractional order 1.0 on four trials, 0.9 on z_df3."""
     for name in ("z_df", "z_df2", "z_df3", "z_pf", "z_pf2"):
         t = load_ankle_trial(name)
         res, _ = fit_joint_frf(t.position, t.torque, t.fs_hz, FrfConfig(band_hz=JOINT_BAND_HZ), name)
         integer, frac = res["impedance"]["integer"], res["impedance"]["fractional"]
-        assert 0.01 < integer["I"] < 0.05 and 20 < integer["K"] < 500 and integer["r2"] > 0.95, name
-        assert 0 < frac["alpha"] < 2 and frac["I"] > 0 and frac["B"] > 0 and frac["K"] > 0
+        # physiological ranges (foot inertia 0.01-0.05 kg m², ankle stiffness tens to hundreds N m/rad)
+        assert 0.01 < integer["I"] < 0.05 and 20 < integer["K"] < 500 and integer["r2"] > 0.97, name
+        assert frac["alpha"] >= 0.9, (name, frac["alpha"])  # the ankle's damper is nearly viscous
         # the fractional family contains the integer model (alpha = 1): never worse on its criterion
         assert frac["mse_complex"] <= integer["mse_complex"] * (1 + 1e-9)

@@ -150,6 +150,7 @@ def _best_time(fn, repeats=3):
     return best
 
 
+@pytest.mark.slow  # a wall-clock comparison: flaky under load; `make bench` reports the same ratios
 def test_estimate_windows_cost():
     signals, groups, n_obs = _simulate(window_durations(), reps=1, noise=NOISE)
     n_win = n_obs.size
