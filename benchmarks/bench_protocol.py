@@ -8,6 +8,7 @@ longest single window (target <= 2x).
 
 from __future__ import annotations
 
+import os
 import tempfile
 import time
 from pathlib import Path
@@ -17,9 +18,12 @@ import numpy as np
 from mujoco import rollout
 
 from armlab.config.schema import ExperimentConfig
+from armlab.data.h5io import read_trials
 from armlab.estimation.joint_ls import estimate, estimate_windows
 from armlab.estimation.processing import ProcessingConfig, joint_signals
 from armlab.models.scene import build_scene
+from armlab.perturbations.scenario import load_scenario
+from armlab.protocols.conditioning_window import window_specs
 from armlab.protocols.runner import run_protocol
 from armlab.sim.hold import settle
 
@@ -38,6 +42,7 @@ def main() -> None:
         t0 = time.perf_counter()
         res = run_protocol(cfg, Path(tmp) / "run")
         wall = time.perf_counter() - t0
+        tr = read_trials(Path(tmp) / "run" / "trials.h5")  # the run's own trials: no second simulation
     tim = res["timing"]
     sim_s = res["simulated_s"]
     print(
@@ -48,21 +53,19 @@ def main() -> None:
 
     scene = build_scene(cfg.arm, cfg.cuff, cfg.robot, cfg.sim)
     hold = settle(scene, cfg.arm, cfg.sim.settle_s)
-    nstep = int(round(sim_s / 780 / scene.model.opt.timestep))
-    ctrl = np.broadcast_to(hold.ctrl, (780, nstep, scene.model.nu))
-    data = [mujoco.MjData(scene.model) for _ in range(2)]
+    n = tr.n_trials
+    nstep = int(round(sim_s / n / scene.model.opt.timestep))
+    ctrl = np.broadcast_to(hold.ctrl, (n, nstep, scene.model.nu))
+    data = [mujoco.MjData(scene.model) for _ in range(os.cpu_count() or 1)]  # as armlab's rollout
     t1 = time.perf_counter()
-    rollout.rollout(scene.model, data, np.tile(hold.state, (780, 1)), ctrl)
+    rollout.rollout(scene.model, data, np.tile(hold.state, (n, 1)), ctrl)
     bare = time.perf_counter() - t1
     print(
         f"bare mujoco.rollout of the same scene and length: {bare:.1f} s "
         f"-> armlab simulation at {bare / tim['simulate_s']:.2f} of the engine's limit"
     )
 
-    from armlab.protocols.conditioning_window import simulate_protocol, window_specs
-
-    rec, scenario = simulate_protocol(cfg)
-    tr = rec.trials
+    scenario = load_scenario(cfg.scenario.name)
     sig = joint_signals(
         tr.channel("hand_pos"),
         tr.channel("hand_force"),
