@@ -108,8 +108,8 @@ def test_constants_mirror_the_mjcf():
     def idx(obj, name):
         return mujoco.mj_name2id(model, obj, name)
 
-    assert model.body_pos[idx(mujoco.mjtObj.mjOBJ_BODY, "link2")][:2] == pytest.approx([0, LINK1_LENGTH_M])
-    assert model.site_pos[idx(mujoco.mjtObj.mjOBJ_SITE, "ee")][:2] == pytest.approx([LINK2_LENGTH_M, 0])
+    assert model.body_pos[idx(mujoco.mjtObj.mjOBJ_BODY, "link2")][:2] == pytest.approx([LINK1_LENGTH_M, 0])
+    assert model.site_pos[idx(mujoco.mjtObj.mjOBJ_SITE, "ee")][:2] == pytest.approx([0, -LINK2_LENGTH_M])
     for i in (1, 2):
         act, rotor = (
             idx(mujoco.mjtObj.mjOBJ_ACTUATOR, f"motor{i}"),
@@ -244,12 +244,12 @@ def test_fk_and_jacobians_match_the_ee_site():
     eps = 1e-6
     fd = (DYN.jacobian(theta + eps * theta_dot) - DYN.jacobian(theta - eps * theta_dot)) / (2 * eps)
     np.testing.assert_allclose(DYN.jacobian_dot(theta, theta_dot), fd, atol=1e-8)
-    assert DYN.fk(np.array([np.pi / 4, np.pi / 4])) == pytest.approx([0.0, 0.7 * np.sqrt(0.5)])
+    assert DYN.fk(np.array([np.pi / 4, np.pi / 4])) == pytest.approx([0.7 * np.sqrt(0.5), 0.0], abs=1e-15)
 
 
 def test_eq7_from_the_ee_accelerometer_gives_the_link_accelerations():
     # compliant robot, cable at rest: the links' accelerations are whatever the cable and the
-    # dynamics give; the accelerometer (ee site frame, x along link 2) rotated into the base frame
+    # dynamics give; the accelerometer (ee site frame, link 2's body axes) rotated into the base frame
     # and Eq. (7) must return them
     model = _model(rigid=False)
     data = mujoco.MjData(model)
@@ -262,7 +262,10 @@ def test_eq7_from_the_ee_accelerometer_gives_the_link_accelerations():
         data.qpos[a["rotor1"]] += 0.01 * CAPSTAN_RATIO * (-1) ** k  # a stretched cable pulls
         mujoco.mj_forward(model, data)
         acc_site = data.sensordata[adr["ee_acc"] : adr["ee_acc"] + 3]
-        acc = data.site_xmat[sid].reshape(3, 3) @ acc_site
+        rot = data.site_xmat[sid].reshape(3, 3)
+        c, s = np.cos(th[1]), np.sin(th[1])  # the site frame is turned by theta2 (README)
+        np.testing.assert_allclose(rot, [[c, -s, 0], [s, c, 0], [0, 0, 1]], atol=1e-12)
+        acc = rot @ acc_site
         assert acc[2] == pytest.approx(9.81)  # the default gravity, normal to the plane
         want = [data.qacc[a["shoulder"]], data.qacc[a["shoulder"]] + data.qacc[a["elbow"]]]
         np.testing.assert_allclose(DYN.joint_acceleration(th, thd, acc[:2]), want, rtol=1e-9, atol=1e-9)

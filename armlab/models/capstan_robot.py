@@ -16,9 +16,10 @@ from the Lagrangian of ``I``: with ``I12 = -a2/2 sin(t1 - t2)`` the centrifugal 
 is ``-a2/2 cos(t1 - t2) t1_d^2``, which makes ``dI/dt - 2C`` skew-symmetric. This module uses the
 consistent ``C``; ``models/capstan_planar`` realises exactly this rigid model (README there).
 
-Kinematics (frames of ``models/capstan_planar``): the shoulder axis is the origin, x lateral,
-y anterior. Link 1 points along ``(-sin t1, cos t1)`` and link 2 along ``(cos t2, sin t2)``, so
-``X = l1 (-sin t1, cos t1) + l2 (cos t2, sin t2)``; the 90 degree offset of link 1 is what turns
+Kinematics (frames of ``models/capstan_planar``): the shoulder axis is the origin, x forward
+(towards the subject; the paper's x, along which Table I's ``X0`` lies at 0.33-0.39 m), y to the
+left. Link 1 points along ``(cos t1, sin t1)`` and link 2 along ``(sin t2, -cos t2)``, so
+``X = l1 (cos t1, sin t1) + l2 (sin t2, -cos t2)``; the 90 degree offset of link 2 is what turns
 the serial arm's coupling into the ``sin(t1 - t2)`` of Eq. (11).
 
 Every function broadcasts over leading dimensions (trials, samples, ...).
@@ -194,11 +195,11 @@ class CapstanDynamics:
         return np.stack([row1, row2], axis=-2)
 
     def fk(self, theta: np.ndarray) -> np.ndarray:
-        """End-effector position X (..., 2) m in the base frame (x lateral, y anterior)."""
+        """End-effector position X (..., 2) m in the base frame (x forward, y left)."""
         theta = _pair(theta, "theta")
         t1, t2 = theta[..., 0], theta[..., 1]
         return np.stack(
-            [-self.l1 * np.sin(t1) + self.l2 * np.cos(t2), self.l1 * np.cos(t1) + self.l2 * np.sin(t2)],
+            [self.l1 * np.cos(t1) + self.l2 * np.sin(t2), self.l1 * np.sin(t1) - self.l2 * np.cos(t2)],
             axis=-1,
         )
 
@@ -206,7 +207,7 @@ class CapstanDynamics:
         """``J = dX/dTheta`` (..., 2, 2) m/rad, the Jacobian of Eqs. (1), (2) and (7)."""
         theta = _pair(theta, "theta")
         t1, t2 = theta[..., 0], theta[..., 1]
-        return _mat(-self.l1 * np.cos(t1), -self.l2 * np.sin(t2), -self.l1 * np.sin(t1), self.l2 * np.cos(t2))
+        return _mat(-self.l1 * np.sin(t1), self.l2 * np.cos(t2), self.l1 * np.cos(t1), self.l2 * np.sin(t2))
 
     def jacobian_dot(self, theta: np.ndarray, theta_dot: np.ndarray) -> np.ndarray:
         """``dJ/dt`` (..., 2, 2) m/(rad·s), for Eq. (7)."""
@@ -214,10 +215,10 @@ class CapstanDynamics:
         t1, t2 = theta[..., 0], theta[..., 1]
         w1, w2 = theta_dot[..., 0], theta_dot[..., 1]
         return _mat(
-            self.l1 * np.sin(t1) * w1,
-            -self.l2 * np.cos(t2) * w2,
             -self.l1 * np.cos(t1) * w1,
             -self.l2 * np.sin(t2) * w2,
+            -self.l1 * np.sin(t1) * w1,
+            self.l2 * np.cos(t2) * w2,
         )
 
     def joint_acceleration(self, theta: np.ndarray, theta_dot: np.ndarray, x_ddot: np.ndarray) -> np.ndarray:
