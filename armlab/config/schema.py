@@ -10,10 +10,12 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+from armlab.config.capstan import CapstanConfig, VfsConfig
 from armlab.errors import ConfigError
 
 __all__ = [
     "ArmConfig",
+    "CapstanConfig",
     "CuffConfig",
     "DirectDriveConfig",
     "ElbowConfig",
@@ -26,6 +28,7 @@ __all__ = [
     "ScenarioConfig",
     "SensorsConfig",
     "SimConfig",
+    "VfsConfig",
 ]
 
 MUSCLE_VARIANTS = ("hill", "linear")
@@ -394,6 +397,8 @@ class ExperimentConfig:
     elbow: ElbowConfig = field(default_factory=ElbowConfig)
     motor: DirectDriveConfig = field(default_factory=DirectDriveConfig)
     frf: FrfConfig = field(default_factory=FrfConfig)
+    capstan: CapstanConfig = field(default_factory=CapstanConfig)
+    vfs: VfsConfig = field(default_factory=VfsConfig)
     sim: SimConfig = field(default_factory=SimConfig)
     sensors: SensorsConfig = field(default_factory=SensorsConfig)
     scenario: ScenarioConfig = field(default_factory=ScenarioConfig)

@@ -203,6 +203,30 @@ class CapstanDynamics:
             axis=-1,
         )
 
+    def ik(self, x: np.ndarray) -> np.ndarray:
+        """Joint angles Theta (..., 2) rad placing the end effector at ``x`` (..., 2) m.
+
+        The branch with the elbow bent to the right of link 1 (the MJCF's elbow joint
+        ``theta2 - theta1`` in (-pi/2, pi/2) over the usable workspace), so ``fk(ik(x)) == x``.
+
+        Raises:
+            DataError: a point outside the annulus ``|l1 - l2| < |x| < l1 + l2``.
+        """
+        x = _pair(x, "x")
+        r2 = np.sum(x * x, axis=-1)
+        c = (r2 - self.l1**2 - self.l2**2) / (2 * self.l1 * self.l2)
+        if np.any(~(np.abs(c) < 1.0)):
+            r = np.sqrt(r2)
+            raise DataError(
+                f"end-effector position(s) out of reach: distance {np.min(r):.4g}..{np.max(r):.4g} m from "
+                f"the shoulder axis; reachable ({abs(self.l1 - self.l2):.4g}, {self.l1 + self.l2:.4g}) m"
+            )
+        delta = -np.arccos(c)  # angle from link 1 to link 2 (link directions theta1, theta2 - pi/2)
+        t1 = np.arctan2(x[..., 1], x[..., 0]) - np.arctan2(
+            self.l2 * np.sin(delta), self.l1 + self.l2 * np.cos(delta)
+        )
+        return np.stack([t1, t1 + delta + 0.5 * np.pi], axis=-1)
+
     def jacobian(self, theta: np.ndarray) -> np.ndarray:
         """``J = dX/dTheta`` (..., 2, 2) m/rad, the Jacobian of Eqs. (1), (2) and (7)."""
         theta = _pair(theta, "theta")

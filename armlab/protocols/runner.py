@@ -9,10 +9,13 @@ every trial).
   ``errors.png``.
 - ``fractional_elbow``: ``fig4_bode_fits.png``, ``fig5_time_overlay.png``,
   ``fig6_bode_literature.png`` and ``table_I.txt``.
+- ``virtual_force_sensor``: ``tables.txt`` (Tables III-VI beside the paper's),
+  ``fig4_forces.png``, ``fig5_identified_vs_theory.png``, ``fig_arm.png``.
 """
 
 from __future__ import annotations
 
+import json
 import time
 from datetime import datetime
 from pathlib import Path
@@ -20,7 +23,7 @@ from pathlib import Path
 import numpy as np
 from omegaconf import OmegaConf
 
-from armlab.config.schema import EstimatorConfig, ExperimentConfig, FrfConfig
+from armlab.config.schema import EstimatorConfig, ExperimentConfig, FrfConfig, VfsConfig
 from armlab.config.store import apply_overrides, to_experiment
 from armlab.data.h5io import read_trials, write_trials
 from armlab.data.trial import TrialSet
@@ -36,6 +39,8 @@ from armlab.protocols.conditioning_window import (
     window_specs,
 )
 from armlab.protocols.fractional_elbow import estimate_fractional, simulate_fractional
+from armlab.protocols.vfs_results import estimate_vfs
+from armlab.protocols.virtual_force_sensor import simulate_vfs
 
 __all__ = [
     "PROTOCOLS",
@@ -44,7 +49,7 @@ __all__ = [
     "run_protocol",
 ]
 
-PROTOCOLS = ("conditioning_window", "fractional_elbow")
+PROTOCOLS = ("conditioning_window", "fractional_elbow", "virtual_force_sensor")
 
 
 def _save_trials(path: Path, trials: TrialSet, extra_attrs: dict) -> None:
@@ -126,7 +131,40 @@ def _run_fractional(cfg: ExperimentConfig, out_dir: Path, config_yaml: str, timi
     return results
 
 
-_RUNS = {"conditioning_window": _run_conditioning, "fractional_elbow": _run_fractional}
+def _run_vfs(cfg: ExperimentConfig, out_dir: Path, config_yaml: str, timing: dict) -> dict:
+    from armlab import viz
+
+    t0 = time.perf_counter()
+    rec = simulate_vfs(cfg)
+    timing["simulate_s"] = time.perf_counter() - t0
+    t1 = time.perf_counter()
+    results, series = estimate_vfs(rec.trials, cfg.vfs, rec.truth)
+    timing["estimate_s"] = time.perf_counter() - t1
+    results["simulated_s"] = rec.trials.n_trials * rec.trials.n_samples / rec.trials.fs_hz
+    t2 = time.perf_counter()
+    if cfg.output.trials:
+        _save_trials(
+            out_dir / "trials.h5",
+            rec.trials,
+            {"config_yaml": config_yaml, "truth_json": json.dumps(rec.truth)},
+        )
+    scene = rec.scenes.get("arm") or rec.scenes.get("fixture") or rec.scenes["robot_id"]
+    write_new(out_dir / "scene.xml", scene)
+    written = {"tables": write_new(out_dir / "tables.txt", viz.format_vfs_tables(results) + "\n")}
+    if cfg.output.figures:
+        written.update(viz.plot_vfs_figures(results, series, out_dir))
+    if cfg.output.recording:
+        written["recording"] = viz.write_vfs_recording(out_dir / "trials.rrd", rec.trials, results)
+    results["files"] = {k: str(v) for k, v in written.items()}
+    timing["outputs_s"] = time.perf_counter() - t2
+    return results
+
+
+_RUNS = {
+    "conditioning_window": _run_conditioning,
+    "fractional_elbow": _run_fractional,
+    "virtual_force_sensor": _run_vfs,
+}
 
 
 def run_protocol(cfg: ExperimentConfig, out_dir: Path, config_yaml: str = "") -> dict:
@@ -164,8 +202,8 @@ def reestimate(run_dir: Path, overrides: list[str] | None = None) -> tuple[Path,
     """Re-run the estimation on a run's saved ``trials.h5`` without simulating again.
 
     The settings come from the run's stored config, updated by overrides of the form
-    ``estimator.<field>=<value>`` (conditioning_window) or ``frf.<field>=<value>``
-    (fractional_elbow). Results go to a new ``reestimate_<timestamp>/`` directory inside the run
+    ``estimator.<field>=<value>`` (conditioning_window), ``frf.<field>=<value>``
+    (fractional_elbow) or ``vfs.<field>=<value>`` (virtual_force_sensor). Results go to a new ``reestimate_<timestamp>/`` directory inside the run
     directory.
     """
     run_dir = Path(run_dir)
@@ -188,6 +226,9 @@ def reestimate(run_dir: Path, overrides: list[str] | None = None) -> tuple[Path,
         groups = sorted(set(np.asarray(trials.trial_meta["group"]).tolist()))
         scenario = scenario.subset(k_values=groups, n_trials=None)
         results, _ = estimate_protocol(trials, estimator, window_specs(scenario, estimator))
+    elif protocol == "virtual_force_sensor":
+        vfs = apply_overrides(_group(VfsConfig, stored, "vfs"), "vfs", overrides)
+        results, _ = estimate_vfs(trials, vfs, json.loads(str(trials.attrs.get("truth_json", "{}"))))
     else:
         raise DataError(f"{path} holds trials of protocol {protocol!r}; valid: {list(PROTOCOLS)}")
     out = run_dir / f"reestimate_{datetime.now():%Y-%m-%d_%H-%M-%S-%f}"
@@ -202,6 +243,10 @@ def _fmt(x) -> str:
 
 def format_table(results: dict) -> str:
     """The run's results as a text table (printed at the end of ``armlab run``)."""
+    if results.get("protocol") == "virtual_force_sensor":
+        from armlab.viz import format_vfs_tables
+
+        return format_vfs_tables(results) + _timing_line(results)
     if results.get("protocol") == "fractional_elbow":
         from armlab.viz import format_fractional_table
 

@@ -21,6 +21,9 @@ from armlab.errors import ConfigError
 from armlab.sensors.channel import ChannelSpec, apply_channel
 
 __all__ = [
+    "ADXL203_ACCEL",
+    "CAPSTAN_ENCODER",
+    "JR3_50M31_FORCE",
     "DD_ENCODER",
     "JR3_FORCE",
     "JR3_TORQUE",
@@ -29,6 +32,7 @@ __all__ = [
     "SENSOR_PRESETS",
     "get_preset",
     "SensorSuite",
+    "CapstanSensorSuite",
     "CHANNEL_SPEC_FIELDS",
     "measure",
 ]
@@ -90,7 +94,39 @@ LWR_JOINT_TORQUE = ChannelSpec(
 # per revolution (assumption: a common emulated resolution), one count = 1.92e-4 rad.
 DD_ENCODER = ChannelSpec(quant_step=2 * math.pi / 32768)
 
+# --- Virtual-force-sensor lab (seeds/003, Sec. II-B) ----------------------------------------
+# Capstan robot's motor encoders in link-side radians: the paper gives "a Cartesian resolution of
+# better than 0.002 mm"; one count of each joint moves the end effector by at most (l1 + l2) x
+# step, so step = 0.002 mm / 0.7 m = 2.86e-6 rad (about 2.2 M counts per link turn).
+CAPSTAN_ENCODER = ChannelSpec(quant_step=0.002e-3 / 0.7)
+# ADXL203 two-axis accelerometer (Analog Devices ADXL103/ADXL203 datasheet, Rev. B): noise
+# density 110 ug/sqrt(Hz) rms; bandwidth set by the output capacitors, 50 Hz with C = 0.1 uF
+# (datasheet's f_-3dB = 1 / (2 pi 32 kOhm C)), a single-pole filter. White noise at the 1 kHz
+# samples with that density over the 500 Hz Nyquist band: 110e-6 x 9.81 x sqrt(500) = 0.024 m/s²
+# before the 50 Hz pole. Zero-g offset after a static calibration: 0.02 m/s² (assumption; the
+# datasheet's uncalibrated offset is +-25 mg).
+ADXL203_ACCEL = ChannelSpec(
+    noise_std=110e-6 * 9.81 * math.sqrt(500.0),  # m/s², datasheet noise density over 0-500 Hz
+    bias_std=0.02,  # m/s², assumption (residual after calibration)
+    bandwidth_hz=50.0,  # Hz, C_x = C_y = 0.1 uF (datasheet)
+    filter_order=1,
+)
+# JR3 50M31A3 F/T sensor (the paper's model; 50 mm, rated +-100 N in Fx, Fy: assumption, JR3's
+# "-I25" class is 25 lbf = 111 N): same DSP (16384 counts full scale, 125 Hz output) and the same
+# noise/offset/drift assumptions as JR3_FORCE above, scaled to the smaller range.
+JR3_50M31_FORCE = ChannelSpec(
+    noise_std=0.025,  # N, assumption (~4 counts of 0.0068 N)
+    bias_std=0.05,  # N, assumption (offset after taring)
+    drift_per_s=0.001,  # N/s, assumption
+    quant_step=111.0 / 16384,  # N, 111 N full scale / 16384 counts
+    bandwidth_hz=125.0,  # Hz, JR3 DSP filter-2 output
+    filter_order=2,
+)
+
 SENSOR_PRESETS: dict[str, ChannelSpec] = {
+    "capstan_encoder": CAPSTAN_ENCODER,
+    "adxl203": ADXL203_ACCEL,
+    "jr3_50m31_force": JR3_50M31_FORCE,
     "jr3_force": JR3_FORCE,
     "jr3_torque": JR3_TORQUE,
     "lwr_encoder": LWR_ENCODER,
@@ -153,13 +189,19 @@ class SensorSuite:
         ideal = ChannelSpec.ideal()
         return cls(ft_force=ideal, ft_torque=ideal, encoder=ideal, joint_torque=ideal)
 
+    @staticmethod
+    def channel_fields() -> dict[str, str]:
+        """Clean channel name -> field, in the fixed order of the random streams."""
+        return CHANNEL_SPEC_FIELDS
+
     def spec_for(self, channel: str) -> ChannelSpec:
-        """The spec applied to clean channel ``channel`` (a key of :data:`CHANNEL_SPEC_FIELDS`)."""
+        """The spec applied to clean channel ``channel`` (a key of :meth:`channel_fields`)."""
+        fields_ = self.channel_fields()
         try:
-            return getattr(self, CHANNEL_SPEC_FIELDS[channel])
+            return getattr(self, fields_[channel])
         except KeyError:
             raise ConfigError(
-                f"no sensor model for channel {channel!r}; valid channels: {list(CHANNEL_SPEC_FIELDS)}"
+                f"no sensor model for channel {channel!r}; valid channels: {list(fields_)}"
             ) from None
 
 
@@ -180,7 +222,7 @@ def measure(
     Args:
         clean: channel name -> (n_trials, n_samples, n_axes) clean signal; names among
             ``ft_force`` (N), ``ft_torque`` (N·m), ``robot_q`` (rad), ``robot_tau`` (N·m).
-        suite: the sensor models.
+        suite: the sensor models (:class:`SensorSuite`, :class:`CapstanSensorSuite`).
         fs_hz: sample rate, Hz.
         rng: the only source of randomness; advanced by a fixed number of draws.
         t0_s: (n_trials,) s since taring at each record's first sample (see
@@ -192,15 +234,53 @@ def measure(
     Raises:
         ConfigError: a name in ``clean`` has no sensor model.
     """
-    unknown = sorted(set(clean) - set(CHANNEL_SPEC_FIELDS))
+    order = suite.channel_fields()
+    unknown = sorted(set(clean) - set(order))
     if unknown:
-        raise ConfigError(
-            f"no sensor model for channels {unknown}; valid channels: {list(CHANNEL_SPEC_FIELDS)}"
-        )
-    seeds = rng.integers(0, 2**63, size=len(CHANNEL_SPEC_FIELDS), dtype=np.int64)
+        raise ConfigError(f"no sensor model for channels {unknown}; valid channels: {list(order)}")
+    seeds = rng.integers(0, 2**63, size=len(order), dtype=np.int64)
     out: dict[str, np.ndarray] = {}
-    for seed, name in zip(seeds, CHANNEL_SPEC_FIELDS, strict=True):
+    for seed, name in zip(seeds, order, strict=True):
         if name in clean:
             child = np.random.default_rng(int(seed))
             out[name] = apply_channel(clean[name], fs_hz, suite.spec_for(name), child, t0_s=t0_s)
     return out
+
+
+@dataclass(frozen=True, kw_only=True)
+class CapstanSensorSuite(SensorSuite):
+    """The sensors of the virtual-force-sensor lab (seeds/003 Sec. II-B).
+
+    Attributes:
+        encoder: motor encoders, link-side rad (channel ``theta``).
+        accelerometer: ADXL203 x, y, m/s² (channel ``acc_site``).
+        ft_force: F/T sensor x, y, N (channel ``ft_site``).
+        motor_torque: the controller's recorded torque command, N·m (channel ``tau``; ideal by
+            default: the paper records it from the controller, Table II).
+    """
+
+    ft_force: ChannelSpec
+    encoder: ChannelSpec
+    accelerometer: ChannelSpec
+    motor_torque: ChannelSpec
+    ft_torque: ChannelSpec = ChannelSpec()
+    joint_torque: ChannelSpec = ChannelSpec()
+
+    @staticmethod
+    def channel_fields() -> dict[str, str]:
+        return {"theta": "encoder", "tau": "motor_torque", "acc_site": "accelerometer", "ft_site": "ft_force"}
+
+    @classmethod
+    def realistic(cls) -> CapstanSensorSuite:
+        """Capstan encoders, ADXL203 accelerometer, JR3 50M31 F/T sensor, exact torque command."""
+        return cls(
+            ft_force=JR3_50M31_FORCE,
+            encoder=CAPSTAN_ENCODER,
+            accelerometer=ADXL203_ACCEL,
+            motor_torque=ChannelSpec(),
+        )
+
+    @classmethod
+    def ideal(cls) -> CapstanSensorSuite:
+        ideal = ChannelSpec.ideal()
+        return cls(ft_force=ideal, encoder=ideal, accelerometer=ideal, motor_torque=ideal)

@@ -22,6 +22,7 @@ from armlab.viz.recording import (
     view_command,
     write_recording,
 )
+from armlab.viz.vfs import format_vfs_tables, plot_vfs_figures, write_vfs_recording
 
 __all__ = [
     "DEFAULT_SCALAR_CHANNELS",
@@ -37,4 +38,7 @@ __all__ = [
     "plot_time_overlay",
     "write_fractional_recording",
     "plot_joint_bode",
+    "format_vfs_tables",
+    "plot_vfs_figures",
+    "write_vfs_recording",
 ]

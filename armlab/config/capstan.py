@@ -1,0 +1,172 @@
+"""Typed configuration of the capstan robot and the virtual-force-sensor protocol (seeds/003).
+
+Two groups of :class:`~armlab.config.schema.ExperimentConfig`: ``capstan`` (the robot as built:
+cable compliance, cabling drag, PD gains) and ``vfs`` (the protocol: which configurations, how
+many trials, the perturbation and the processing of Sec. III-A). Sources in the comments; the
+numbers marked *assumption* are not in the paper (see models/capstan_planar/README.md).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+from armlab.errors import ConfigError
+
+__all__ = [
+    "CABLE_MODES",
+    "ROBOT_MODELS",
+    "CapstanConfig",
+    "VfsConfig",
+]
+
+CABLE_MODES = ("rigid", "compliant")
+ROBOT_MODELS = ("identified", "table_vi")
+STIFFNESS_LABELS = ("K1", "K2", "K3", "K4", "K5")  # Table I
+PAYLOAD_LABELS = ("M1", "M2", "M3", "M4", "M5")  # Table I
+
+
+def _check(cond: bool, msg: str) -> None:
+    if not cond:
+        raise ConfigError(msg)
+
+
+def _positive(group: str, obj, *names: str) -> None:
+    for name in names:
+        value = getattr(obj, name)
+        _check(
+            isinstance(value, (int, float)) and math.isfinite(value) and value > 0,
+            f"{group}.{name} must be a finite number > 0, got {value!r}",
+        )
+
+
+@dataclass(kw_only=True)
+class CapstanConfig:
+    """The capstan-driven planar robot of models/capstan_planar as it stands in the lab.
+
+    ``cable``: ``rigid`` activates the equality constraints that lock each motor to its link
+    (Table VI holds exactly); ``compliant`` leaves the capstan cables as springs. ``drag``: the
+    elastic pull of the F/T-sensor and accelerometer cables (paper Sec. IV-A), a spatial spring
+    from a point on the base to the end effector, so it acts mostly along x.
+    """
+
+    model: str = "capstan_planar"
+    cable: str = "compliant"
+    # Link-side capstan cable stiffness, N·m/rad (assumption: static end-effector compliance
+    # J J^T / k below 1e-4 m/N, so that the series compliance biases Table I's stiffnesses by
+    # < 5 %; the link-on-cable resonance with a payload lies near 15 Hz, which lets the rigid
+    # model of Eqs. (11)-(13) hold to ~2 Hz, Appendix)
+    cable_stiffness_Nm_per_rad: float = 2000.0
+    cable_damping_Nms_per_rad: float = 0.05  # N·m·s/rad, lightly damped steel cable (assumption)
+    # Coulomb friction of each motor and capstan, link side, N·m (assumption: the "limited accuracy
+    # of the robot dynamics model" of Sec. IV-A; Eq. (13) has viscous friction only)
+    coulomb_Nm: float = 0.05
+    drag: bool = True
+    # Cabling drag (assumption, sized to the paper's Method 1 - Method 2 stiffness gap of Table III:
+    # +30..56 N/m in k_xx, +6..20 N/m in k_yy): axial stiffness along the cable and rest length,
+    # anchored on the base near the shoulder axis; the tension across the cable adds T/L along y.
+    drag_stiffness_N_per_m: float = 40.0
+    drag_rest_length_m: float = 0.25
+    drag_anchor_m: tuple[float, float] = (0.0, 0.0)
+    # Joint PD controller, link side (assumption; the paper names no gains): tracks the
+    # ten-sine reference to a few percent while leaving the robot back-drivable
+    kp_Nm_per_rad: float = 150.0
+    kd_Nms_per_rad: float = 3.0
+    handle_mass_kg: float = 0.135  # kg, Lambda of Eq. (9), paper Sec. II-C
+
+    def __post_init__(self) -> None:
+        _check(self.model == "capstan_planar", f"capstan.model={self.model!r}; valid: ['capstan_planar']")
+        _check(
+            self.cable in CABLE_MODES,
+            f"capstan.cable={self.cable!r} is not valid; choose one of {list(CABLE_MODES)}",
+        )
+        _positive(
+            "capstan",
+            self,
+            "cable_stiffness_Nm_per_rad",
+            "drag_stiffness_N_per_m",
+            "drag_rest_length_m",
+            "kp_Nm_per_rad",
+            "handle_mass_kg",
+        )
+        for name in ("cable_damping_Nms_per_rad", "kd_Nms_per_rad", "coulomb_Nm"):
+            value = getattr(self, name)
+            _check(math.isfinite(value) and value >= 0, f"capstan.{name} must be >= 0, got {value!r}")
+        _check(
+            len(self.drag_anchor_m) == 2, f"capstan.drag_anchor_m must be (x, y) m, got {self.drag_anchor_m}"
+        )
+
+
+@dataclass(kw_only=True)
+class VfsConfig:
+    """The virtual-force-sensor protocol (seeds/003 Sec. II-C, III and the Appendix).
+
+    Perturbation: each joint tracks a sum of ``n_sines`` sinusoids at evenly spaced frequencies
+    up to ``band_hz[1]`` (the lowest at ``band_hz[0]``) with random phases, scaled to a
+    peak-to-peak range of ``range_deg`` (10 deg for impedance trials, ``id_range_deg`` = 40 deg
+    for the robot identification). Processing: Savitzky-Golay (``sg_order``, ``sg_window``)
+    then a zero-phase Butterworth (``lowpass_order``, ``lowpass_hz``). ``robot_model`` is the
+    dynamics Method 1 uses: ``identified`` (the Appendix identification run first, as the paper),
+    ``table_vi`` (the paper's alphas) or ``true`` (the simulated robot's own alphas).
+    """
+
+    stiffness: list[str] = field(default_factory=lambda: list(STIFFNESS_LABELS))
+    payloads: list[str] = field(default_factory=lambda: list(PAYLOAD_LABELS))
+    trials_per_config: int = 3  # paper Sec. II-C-1: three 50 s trials per configuration
+    arm_trials: int = 5  # paper Sec. II-C-2: five trials of the human arm
+    robot_id_trials: int = 6  # Appendix: six 50 s trials
+    trial_s: float = 50.0  # s, paper Sec. II-C-1
+    id_s: float = 40.0  # s, least squares on the first 40 s (Sec. III-B)
+    val_s: float = 10.0  # s, VAF on the last 10 s (Sec. III-B)
+    settle_s: float = 2.0  # s before each trial with the reference held (not recorded)
+    n_sines: int = 10  # paper Sec. II-C-1
+    band_hz: tuple[float, float] = (0.2, 2.0)  # Hz, "frequencies from 0 to 2 Hz" (Sec. II-C-1)
+    range_deg: float = 10.0  # deg peak to peak per joint (Sec. II-C-1)
+    id_range_deg: float = 40.0  # deg peak to peak per joint (Appendix)
+    sg_order: int = 6  # Sec. III-A
+    sg_window: int = 151  # samples at 1 kHz, Sec. III-A
+    lowpass_hz: float = 4.5  # Hz, zero-phase 5th-order Butterworth (Sec. III-A)
+    lowpass_order: int = 5
+    robot_model: str = "identified"
+    id_drag: bool = False
+    # human arm: handle at Table V's equilibrium (x_v, y_v) = (383, 15) mm, the shoulder 0.5 m
+    # behind it along +x (hand 50 cm anterior to the shoulder, Sec. II-C-2)
+    arm_handle_m: tuple[float, float] = (0.383, 0.015)
+    arm_reach_m: float = 0.5
+
+    def __post_init__(self) -> None:
+        bad = [s for s in self.stiffness if s not in STIFFNESS_LABELS]
+        _check(not bad, f"vfs.stiffness has unknown labels {bad}; valid: {list(STIFFNESS_LABELS)}")
+        bad = [p for p in self.payloads if p not in PAYLOAD_LABELS]
+        _check(not bad, f"vfs.payloads has unknown labels {bad}; valid: {list(PAYLOAD_LABELS)}")
+        for name in ("trials_per_config", "arm_trials", "robot_id_trials"):
+            value = getattr(self, name)
+            _check(
+                isinstance(value, int) and value >= 0, f"vfs.{name} must be an integer >= 0, got {value!r}"
+            )
+        _check(
+            self.robot_id_trials >= 1 or self.robot_model != "identified",
+            "vfs.robot_id_trials must be >= 1 when vfs.robot_model='identified'",
+        )
+        _positive(
+            "vfs", self, "trial_s", "id_s", "val_s", "range_deg", "id_range_deg", "lowpass_hz", "arm_reach_m"
+        )
+        _check(self.settle_s >= 0, f"vfs.settle_s must be >= 0 s, got {self.settle_s}")
+        _check(
+            self.id_s <= self.trial_s and self.val_s <= self.trial_s,
+            f"vfs.id_s ({self.id_s} s) and vfs.val_s ({self.val_s} s) must fit in "
+            f"vfs.trial_s ({self.trial_s} s)",
+        )
+        _check(self.n_sines >= 1, f"vfs.n_sines must be >= 1, got {self.n_sines}")
+        lo, hi = self.band_hz
+        _check(0 < lo <= hi, f"vfs.band_hz must be (low, high) Hz with 0 < low <= high, got {(lo, hi)}")
+        _check(
+            self.sg_window % 2 == 1 and self.sg_window > self.sg_order >= 1,
+            f"vfs.sg_window must be odd and longer than vfs.sg_order (a Savitzky-Golay window of "
+            f"{self.sg_window} samples cannot fit a polynomial of order {self.sg_order})",
+        )
+        _check(self.lowpass_order >= 1, f"vfs.lowpass_order must be >= 1, got {self.lowpass_order}")
+        _check(
+            self.robot_model in ROBOT_MODELS,
+            f"vfs.robot_model={self.robot_model!r} is not valid; choose one of {list(ROBOT_MODELS)}",
+        )
