@@ -123,6 +123,7 @@ class VfsConfig:
     band_hz: tuple[float, float] = (0.2, 2.0)  # Hz, "frequencies from 0 to 2 Hz" (Sec. II-C-1)
     range_deg: float = 10.0  # deg peak to peak per joint (Sec. II-C-1)
     id_range_deg: float = 40.0  # deg peak to peak per joint (Appendix)
+    id_band_hz: tuple[float, float] = (0.2, 2.0)  # Hz, Appendix: 0-2 Hz (capstan elasticity above)
     sg_order: int = 6  # Sec. III-A
     sg_window: int = 151  # samples at 1 kHz, Sec. III-A
     lowpass_hz: float = 4.5  # Hz, zero-phase 5th-order Butterworth (Sec. III-A)
@@ -158,8 +159,9 @@ class VfsConfig:
             f"vfs.trial_s ({self.trial_s} s)",
         )
         _check(self.n_sines >= 1, f"vfs.n_sines must be >= 1, got {self.n_sines}")
-        lo, hi = self.band_hz
-        _check(0 < lo <= hi, f"vfs.band_hz must be (low, high) Hz with 0 < low <= high, got {(lo, hi)}")
+        for name in ("band_hz", "id_band_hz"):
+            lo, hi = getattr(self, name)
+            _check(0 < lo <= hi, f"vfs.{name} must be (low, high) Hz with 0 < low <= high, got {(lo, hi)}")
         _check(
             self.sg_window % 2 == 1 and self.sg_window > self.sg_order >= 1,
             f"vfs.sg_window must be odd and longer than vfs.sg_order (a Savitzky-Golay window of "

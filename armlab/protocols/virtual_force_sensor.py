@@ -73,13 +73,14 @@ def _stage(
     n_trials: int,
     range_deg: float,
     rng: np.random.Generator,
+    band_hz: tuple[float, float],
     arm_q: np.ndarray | None = None,
     activation: np.ndarray | None = None,
 ) -> dict[str, np.ndarray]:
     v, c = cfg.vfs, cfg.capstan
     refs = [
         sum_of_sines(
-            rng, n_sines=v.n_sines, band_hz=v.band_hz, range_rad=np.deg2rad(range_deg), fade_s=v.settle_s
+            rng, n_sines=v.n_sines, band_hz=band_hz, range_rad=np.deg2rad(range_deg), fade_s=v.settle_s
         )
         for _ in range(n_trials)
     ]
@@ -129,7 +130,12 @@ def simulate_vfs(cfg: ExperimentConfig) -> VfsRecording:
             robot_cfg, "none", timestep_s=cfg.sim.timestep_s, integrator=cfg.sim.integrator
         )
         scenes["robot_id"] = scene.xml
-        add("robot_id", _stage(cfg, scene, np.array(HOME_THETA_RAD), v.robot_id_trials, v.id_range_deg, rng))
+        add(
+            "robot_id",
+            _stage(
+                cfg, scene, np.array(HOME_THETA_RAD), v.robot_id_trials, v.id_range_deg, rng, v.id_band_hz
+            ),
+        )
     if v.trials_per_config:
         for k_label in v.stiffness:
             field = TABLE_I_STIFFNESS[k_label]
@@ -147,7 +153,7 @@ def simulate_vfs(cfg: ExperimentConfig) -> VfsRecording:
                 theta0 = scene.dynamics.ik(np.array([field.x0, field.y0]))
                 add(
                     "fixture",
-                    _stage(cfg, scene, theta0, v.trials_per_config, v.range_deg, rng),
+                    _stage(cfg, scene, theta0, v.trials_per_config, v.range_deg, rng, v.band_hz),
                     k_label,
                     m_label,
                 )
@@ -158,7 +164,7 @@ def simulate_vfs(cfg: ExperimentConfig) -> VfsRecording:
         theta0, arm_q = scene.dynamics.ik(handle), scene.arm_posture(handle)
         act = relaxed_activation(scene, scene.initial_state(theta0, arm_q), cfg.arm.cocontraction)
         truth["arm"] = endpoint_truth(scene, scene.initial_state(theta0, arm_q, act)).as_dict()
-        add("arm", _stage(cfg, scene, theta0, v.arm_trials, v.range_deg, rng, arm_q, act))
+        add("arm", _stage(cfg, scene, theta0, v.arm_trials, v.range_deg, rng, v.band_hz, arm_q, act))
     channels = {k: np.concatenate([b[k] for b in batches]) for k in batches[0]}
     n_total = len(channels["theta"])
     trials = TrialSet(
