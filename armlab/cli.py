@@ -3,7 +3,7 @@
     armlab run [protocol=<name>] [Hydra overrides ...]   simulate + estimate, outputs in the run dir
     armlab run --multirun seed=0,1,2 ...                 sweep through Hydra's launcher
     armlab estimate <run_dir> [<group>.<field>=<v>]      re-run estimation on saved trials.h5
-                                                         (group: estimator, or frf for fractional_elbow)
+                                                         (estimator | frf | vfs, by protocol)
     armlab view <run_dir>                                open the run's rerun recording
     armlab fit-joint <csv|folder> [frf.<f>=<v>] [out=<dir>]  FRF + Levy fits of real joint recordings
 
@@ -38,7 +38,7 @@ def _usage() -> str:
         "verbs:\n"
         "  run [--multirun] [protocol=<name>] [overrides]  simulate a protocol and estimate impedance\n"
         "  estimate <run_dir> [<group>.<field>=<value>]    re-run estimation on a run's trials.h5\n"
-        "                                                  (group: estimator; frf for fractional_elbow)\n"
+        "                                                  (estimator | frf | vfs, by protocol)\n"
         "  view <run_dir>                                  open the run's rerun recording (trials.rrd)\n"
         "  fit-joint <csv|folder> [frf.<field>=<value>] [out=<dir>]\n"
         "                                                  impedance/admittance fits of real 1-DoF joint\n"
@@ -49,6 +49,7 @@ def _usage() -> str:
         "  armlab run protocol=conditioning_window seed=3 arm=planar_linear reflex.enabled=false\n"
         "  armlab run --multirun seed=0,1,2 hydra/launcher=joblib\n"
         "  armlab run protocol=fractional_elbow elbow.impedance=fractional elbow.fractional_order=0.5\n"
+        "  armlab run protocol=virtual_force_sensor capstan.cable=rigid capstan.drag=false\n"
     )
 
 

@@ -13,6 +13,7 @@ from armlab.estimation.arm_tf_models import (
     s_power,
     third_order_tf,
 )
+from armlab.estimation.capstan_signals import CapstanSignals, capstan_signals, rotate_by
 from armlab.estimation.criteria import (
     CriteriaConfig,
     asymmetry,
@@ -67,6 +68,25 @@ from armlab.estimation.processing import (
     differentiate,
     joint_signals,
     lowpass_zero_phase,
+)
+from armlab.estimation.smoothing import (
+    SmoothingSpec,
+    filter_response,
+    lowpass,
+    smooth,
+    smooth_and_differentiate,
+)
+from armlab.estimation.smoothing import differentiate as sg_differentiate
+from armlab.estimation.virtual_force import (
+    ArmFit,
+    FixtureFit,
+    RobotIdentification,
+    fit_arm,
+    fit_fixture,
+    identify_robot,
+    table_vi,
+    vaf,
+    virtual_force,
 )
 
 __all__ = [
@@ -124,4 +144,22 @@ __all__ = [
     "differentiate",
     "joint_signals",
     "lowpass_zero_phase",
+    "CapstanSignals",
+    "capstan_signals",
+    "rotate_by",
+    "SmoothingSpec",
+    "filter_response",
+    "lowpass",
+    "smooth",
+    "smooth_and_differentiate",
+    "sg_differentiate",
+    "ArmFit",
+    "FixtureFit",
+    "RobotIdentification",
+    "fit_arm",
+    "fit_fixture",
+    "identify_robot",
+    "table_vi",
+    "vaf",
+    "virtual_force",
 ]

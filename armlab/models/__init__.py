@@ -1,6 +1,8 @@
 """Loading and composing the MJCF models, analytic arm kinematics, and ground truth."""
 
+from armlab.models.arm_endpoint import EndpointTruth, endpoint_truth, relaxed_activation
 from armlab.models.capstan_robot import TABLE_VI_ALPHA, CapstanDynamics, CapstanParameters
+from armlab.models.capstan_scene import LOADS, CapstanScene, build_capstan_scene
 from armlab.models.direct_drive_scene import ELBOW_MUSCLES, DirectDriveScene, build_direct_drive_scene
 from armlab.models.elbow_truth import ElbowTruth, elbow_truth
 from armlab.models.ground_truth import (
@@ -59,4 +61,10 @@ __all__ = [
     "ground_truth",
     "joint_impedance",
     "model_file",
+    "EndpointTruth",
+    "endpoint_truth",
+    "relaxed_activation",
+    "LOADS",
+    "CapstanScene",
+    "build_capstan_scene",
 ]

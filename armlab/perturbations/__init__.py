@@ -10,6 +10,7 @@ from armlab.perturbations.quintic import (
     quintic_profile,
     window_durations,
 )
+from armlab.perturbations.sum_of_sines import SumOfSines, sum_of_sines
 
 __all__ = [
     "multisine",
@@ -22,4 +23,6 @@ __all__ = [
     "polynomial_coefficients",
     "quintic_profile",
     "window_durations",
+    "SumOfSines",
+    "sum_of_sines",
 ]

@@ -22,6 +22,8 @@ from armlab.protocols.runner import (
     reestimate,
     run_protocol,
 )
+from armlab.protocols.vfs_results import METHODS, estimate_vfs, smoothing_spec
+from armlab.protocols.virtual_force_sensor import VfsRecording, simulate_vfs
 
 __all__ = [
     "JOINT_BAND_HZ",
@@ -43,4 +45,9 @@ __all__ = [
     "run_protocol",
     "simulate_protocol",
     "window_specs",
+    "METHODS",
+    "estimate_vfs",
+    "smoothing_spec",
+    "VfsRecording",
+    "simulate_vfs",
 ]

@@ -2,12 +2,16 @@
 
 from armlab.sensors.channel import ChannelSpec, apply_channel
 from armlab.sensors.presets import (
+    ADXL203_ACCEL,
+    CAPSTAN_ENCODER,
     CHANNEL_SPEC_FIELDS,
+    JR3_50M31_FORCE,
     JR3_FORCE,
     JR3_TORQUE,
     LWR_ENCODER,
     LWR_JOINT_TORQUE,
     SENSOR_PRESETS,
+    CapstanSensorSuite,
     SensorSuite,
     get_preset,
     measure,
@@ -25,4 +29,8 @@ __all__ = [
     "SensorSuite",
     "get_preset",
     "measure",
+    "ADXL203_ACCEL",
+    "CAPSTAN_ENCODER",
+    "JR3_50M31_FORCE",
+    "CapstanSensorSuite",
 ]

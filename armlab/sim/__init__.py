@@ -1,5 +1,6 @@
 """Simulation: the held posture, robot IK, batched rollout with reflexes, the simulated lab."""
 
+from armlab.sim.capstan_lab import CLEAN_UNITS, simulate_capstan
 from armlab.sim.force_control import ForceTrial, simulate_force_trial
 from armlab.sim.fractional import FractionalElement, oustaloup_zpk
 from armlab.sim.hold import (
@@ -34,4 +35,6 @@ __all__ = [
     "settle",
     "simulate",
     "solve_ik",
+    "CLEAN_UNITS",
+    "simulate_capstan",
 ]
