@@ -137,9 +137,18 @@ def test_public_api_resolves():
     import armlab.estimation.frf as frf
     import armlab.estimation.joint_ls as ls
     import armlab.estimation.levy as levy
-    import armlab.estimation.processing as proc
+    import importlib
 
-    modules = (crit, ls, proc, frf, levy, tfm, ffit)
+    import armlab.estimation.processing as proc
+    import armlab.estimation.smoothing as sm
+
+    # these modules share their names with the functions the package exports: import by path
+    sig = importlib.import_module("armlab.estimation.capstan_signals")
+    vf = importlib.import_module("armlab.estimation.virtual_force")
+
+    modules = (crit, ls, proc, frf, levy, tfm, ffit, sig, sm, vf)
     for module in (est, *modules):
         assert all(hasattr(module, name) for name in module.__all__), module.__name__
-    assert set().union(*(m.__all__ for m in modules)) == set(est.__all__)
+    # smoothing.differentiate is exported as sg_differentiate (processing.differentiate keeps the name)
+    assert set().union(*(m.__all__ for m in modules)) | {"sg_differentiate"} == set(est.__all__)
+    assert est.sg_differentiate is sm.differentiate and est.differentiate is proc.differentiate
