@@ -34,7 +34,7 @@ from armlab.config.schema import ArmConfig
 from armlab.errors import ConfigError, ModelError
 from armlab.models.capstan_robot import CAPSTAN_RATIO, CapstanDynamics
 from armlab.models.planar_arm import inverse as arm_inverse
-from armlab.models.scene import MUSCLES, model_file, named_id
+from armlab.models.scene import MUSCLES, model_file, named_id, sensor_slices
 from armlab.models.spring_array import SpringArray
 
 os.environ.setdefault("MUJOCO_GL", "egl")
@@ -326,10 +326,7 @@ def _index(
         hand = named_id(model, mujoco.mjtObj.mjOBJ_SITE, f"{arm.model}/hand")
         l1 = float(np.linalg.norm(model.body_pos[forearm]))
         l2 = float(np.linalg.norm(model.site_pos[hand]))
-    sensors = {}
-    for i in range(model.nsensor):
-        adr, dim = int(model.sensor_adr[i]), int(model.sensor_dim[i])
-        sensors[model.sensor(i).name.split("/")[-1]] = slice(adr, adr + dim)
+    sensors = sensor_slices(model)
     link2 = named_id(model, mujoco.mjtObj.mjOBJ_BODY, ns + "link2")
     ee = named_id(model, mujoco.mjtObj.mjOBJ_SITE, ns + "ee")
     return CapstanScene(

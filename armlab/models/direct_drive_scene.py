@@ -21,7 +21,7 @@ import numpy as np
 
 from armlab.config.schema import ElbowConfig, SimConfig
 from armlab.errors import ModelError
-from armlab.models.scene import model_file
+from armlab.models.scene import model_file, sensor_slices
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 from dm_control import mjcf  # noqa: E402
@@ -162,10 +162,7 @@ def build_direct_drive_scene(elbow: ElbowConfig, sim: SimConfig) -> DirectDriveS
         raise ModelError(
             "direct-drive scene lacks joints motor/elbow, the motor actuator or the elbow muscles"
         )
-    sensors = {}
-    for i in range(model.nsensor):
-        adr, dim = int(model.sensor_adr[i]), int(model.sensor_dim[i])
-        sensors[model.sensor(i).name.split("/")[-1]] = slice(adr, adr + dim)
+    sensors = sensor_slices(model)
     # inertia about the motor axis of everything on the motor side, from the compiled model
     data = mujoco.MjData(model)
     mujoco.mj_forward(model, data)

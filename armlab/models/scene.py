@@ -22,6 +22,7 @@ from dm_control import mjcf  # noqa: E402
 
 __all__ = [
     "named_id",
+    "sensor_slices",
     "MODELS_DIR",
     "MUSCLES",
     "Scene",
@@ -144,6 +145,15 @@ def _compose(arm: ArmConfig, cuff: CuffConfig, robot: RobotConfig, sim: SimConfi
     return root
 
 
+def sensor_slices(model: mujoco.MjModel) -> dict[str, slice]:
+    """Sensor name (attachment namespace stripped) -> slice into ``sensordata``."""
+    out = {}
+    for i in range(model.nsensor):
+        adr, dim = int(model.sensor_adr[i]), int(model.sensor_dim[i])
+        out[model.sensor(i).name.split("/")[-1]] = slice(adr, adr + dim)
+    return out
+
+
 def named_id(model: mujoco.MjModel, objtype: mujoco.mjtObj, name: str) -> int:
     """Id of a named model element; a clear :class:`ModelError` instead of MuJoCo's silent -1."""
     i = mujoco.mj_name2id(model, objtype, name)
@@ -177,11 +187,7 @@ def build_scene(arm: ArmConfig, cuff: CuffConfig, robot: RobotConfig, sim: SimCo
     ]
     if min(muscle_act + robot_act) < 0:
         raise ModelError(f"scene lacks muscle actuators {list(MUSCLES)} or robot servos lwr_a1..7")
-    sensors = {}
-    for i in range(model.nsensor):
-        name = model.sensor(i).name.split("/")[-1]
-        adr, dim = int(model.sensor_adr[i]), int(model.sensor_dim[i])
-        sensors[name] = slice(adr, adr + dim)
+    sensors = sensor_slices(model)
 
     def site(name: str) -> int:
         return mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, name)
