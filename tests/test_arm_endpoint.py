@@ -77,8 +77,8 @@ def test_relaxed_activation_at_the_protocol_posture(scene):
 @pytest.mark.parametrize("dq", [(0.05, -0.05), (-0.1, 0.08)])
 def test_relaxed_activation_away_from_the_design_posture(scene, dq):
     # off the re-centred posture uniform activation no longer balances (linear muscles: the
-    # tensions differ by k dL, ~ 0.04 * 14000 N/m * 0.04 m * 0.05 rad ~ 1 N, 0.05 N·m); the
-    # bounded least squares must find other activations with zero net torque
+    # tensions change by act k dL, e.g. 0.04 * 14000 N/m * 0.04 m * 0.05 rad ~ 1 N; seen 0.09 to
+    # 0.2 N·m net); the bounded least squares must find other activations with zero net torque
     theta0, arm_q = _pose(scene, dq)
     uniform = _net_arm_torque(scene, scene.initial_state(theta0, arm_q, LEVEL))
     assert np.max(np.abs(uniform)) > 1e-3
@@ -86,7 +86,7 @@ def test_relaxed_activation_away_from_the_design_posture(scene, dq):
     assert np.all((act >= 0) & (act <= 1))
     assert np.max(np.abs(act - LEVEL)) > 1e-4  # not the trivial answer
     net = _net_arm_torque(scene, scene.initial_state(theta0, arm_q, act))
-    assert np.max(np.abs(net)) < 1e-6  # the module's own tolerance (_EQUILIBRIUM_TOL_NM)
+    assert np.max(np.abs(net)) < 1e-6  # the module's own tolerance (seen 8e-15 N·m)
 
 
 def test_relaxed_activation_ignores_velocities(scene):
@@ -114,7 +114,7 @@ def test_endpoint_matrices_are_physical(truth):
     _, act, tr = truth
     for name, mat in (("M", tr.M), ("B", tr.B), ("K", tr.K)):
         assert mat.shape == (2, 2)
-        # K and B come from central differences (eps 1e-6): symmetric to round-off (seen 1e-9
+        # K and B come from central differences (eps 1e-6): symmetric to round-off (seen 4e-11
         # relative); M from mj_fullM exactly
         np.testing.assert_allclose(mat, mat.T, rtol=0, atol=1e-7 * np.abs(mat).max(), err_msg=name)
         assert np.all(np.linalg.eigvalsh(mat) > 0), name
@@ -162,7 +162,8 @@ def test_endpoint_k_is_minus_the_hand_force_gradient(scene, truth):
     k = -np.column_stack(
         [(hand_force(HANDLE_XY + e) - hand_force(HANDLE_XY - e)) / (2 * eps) for e in eps * np.eye(2)]
     )
-    # truncation (eps / 0.3 m)^2 ~ 1e-9 relative; round-off ~1e-16 * 1 N / 1e-5 m ~ 1e-11 N/m
+    # truncation (eps / 0.3 m)^2 ~ 1e-9 relative; round-off of the inverse kinematics and the
+    # torques over 2 eps: seen 2.8e-7 N/m on K ~ 12..78 N/m
     np.testing.assert_allclose(k, tr.K, rtol=1e-6, atol=1e-5)
 
 

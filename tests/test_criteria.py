@@ -130,6 +130,8 @@ def test_criteria_config_validation(kwargs, message):
 
 
 def test_public_api_resolves():
+    import importlib
+
     import armlab.estimation as est
     import armlab.estimation.arm_tf_models as tfm
     import armlab.estimation.criteria as crit
@@ -137,8 +139,6 @@ def test_public_api_resolves():
     import armlab.estimation.frf as frf
     import armlab.estimation.joint_ls as ls
     import armlab.estimation.levy as levy
-    import importlib
-
     import armlab.estimation.processing as proc
     import armlab.estimation.smoothing as sm
 

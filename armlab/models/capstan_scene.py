@@ -283,7 +283,7 @@ def build_capstan_scene(
     if load == "fixture":
         if not isinstance(array, SpringArray):
             raise ConfigError("a fixture load needs array=SpringArray (armlab.models.spring_array)")
-        if payload_kg is None or not np.isfinite(payload_kg) or payload_kg <= 0:
+        if not isinstance(payload_kg, (int, float)) or not np.isfinite(payload_kg) or payload_kg <= 0:
             raise ConfigError(f"a fixture load needs a payload of finite mass > 0 kg, got {payload_kg!r}")
         mass = float(payload_kg)
     elif load == "arm":

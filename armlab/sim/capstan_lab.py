@@ -130,8 +130,12 @@ def simulate_capstan(
                 ctrl[:, :, scene.muscle_act] = muscle_ctrl
             states, sd = runner.rollout(model, data, state, ctrl, nstep=c1 - c0)
             state = states[:, -1]
-            if not np.all(np.isfinite(state)):
-                raise SimulationError(f"the capstan lab diverged before t = {t[-1]:.3f} s (NaN state)")
+            bad = sum(int(d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number) for d in data)
+            if bad or not np.all(np.isfinite(state)):  # MuJoCo resets a diverged state and warns
+                raise SimulationError(
+                    f"the capstan lab diverged before t = {t[-1]:.3f} s (unstable acceleration); "
+                    f"lower sim.timestep_s (now {dt} s) or the cable stiffness"
+                )
             steps = np.arange(c0, c1) - n_settle
             keep = (steps >= 0) & (steps % sub == 0)
             sd_out[:, steps[keep] // sub] = sd[:, keep]
