@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import json
 import time
+from collections.abc import Callable
+from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
 
@@ -68,23 +70,28 @@ def _save_trials(path: Path, trials: TrialSet, extra_attrs: dict) -> None:
     )
 
 
-def _run_conditioning(cfg: ExperimentConfig, out_dir: Path, config_yaml: str, timing: dict) -> dict:
-    from armlab import viz  # the only place figures and recordings are made
+@dataclass(frozen=True, eq=False)
+class _Simulated:
+    """What a protocol's simulation hands to the shared run: trials, the scene, how to estimate."""
 
-    t0 = time.perf_counter()
+    trials: TrialSet
+    scene_xml: str
+    attrs: dict  # extra attributes of the trial file (beside the config)
+    estimate: Callable[[], tuple[dict, dict]]  # -> (results, series)
+
+
+def _sim_conditioning(cfg: ExperimentConfig) -> _Simulated:
     rec, scenario = simulate_protocol(cfg)
-    trials = rec.trials
-    timing["simulate_s"] = time.perf_counter() - t0
-    t1 = time.perf_counter()
-    specs = window_specs(scenario, cfg.estimator)
-    results, series = estimate_protocol(trials, cfg.estimator, specs)
-    results["linearisation_bias"] = linearisation_bias(cfg)
-    timing["estimate_s"] = time.perf_counter() - t1
-    results["simulated_s"] = trials.n_trials * trials.n_samples / trials.fs_hz
-    t2 = time.perf_counter()
-    if cfg.output.trials:
-        _save_trials(out_dir / "trials.h5", trials, {"config_yaml": config_yaml, "scenario": scenario.name})
-    write_new(out_dir / "scene.xml", rec.scene.xml)
+
+    def estimate() -> tuple[dict, dict]:
+        results, series = estimate_protocol(rec.trials, cfg.estimator, window_specs(scenario, cfg.estimator))
+        results["linearisation_bias"] = linearisation_bias(cfg)
+        return results, series
+
+    return _Simulated(rec.trials, rec.scene.xml, {"scenario": scenario.name}, estimate)
+
+
+def _out_conditioning(viz, out_dir: Path, trials: TrialSet, results: dict, series: dict, cfg) -> dict:
     written = {}
     if cfg.output.figures:
         written["fig4"] = viz.plot_window_sweep(results, out_dir / "fig4_full.png", model="full")
@@ -93,14 +100,20 @@ def _run_conditioning(cfg: ExperimentConfig, out_dir: Path, config_yaml: str, ti
         written["errors"] = viz.plot_error_vs_window(results, out_dir / "errors.png")
     if cfg.output.recording:
         written["recording"] = viz.write_recording(out_dir / "trials.rrd", trials, results)
-    results["files"] = {k: str(v) for k, v in written.items()}
-    timing["outputs_s"] = time.perf_counter() - t2
-    return results
+    return written
 
 
-def _fractional_outputs(out_dir: Path, trials: TrialSet, results: dict, series: dict, cfg) -> dict:
-    from armlab import viz
+def _sim_fractional(cfg: ExperimentConfig) -> _Simulated:
+    rec = simulate_fractional(cfg)
+    return _Simulated(
+        rec.trials,
+        rec.scene.xml,
+        {"scenario": rec.scenario.name},
+        lambda: estimate_fractional(rec.trials, cfg.frf, rec.truth),
+    )
 
+
+def _out_fractional(viz, out_dir: Path, trials: TrialSet, results: dict, series: dict, cfg) -> dict:
     written = {}
     if cfg.output.figures:
         written["fig4"] = viz.plot_bode_fits(series, results, out_dir / "fig4_bode_fits.png")
@@ -109,62 +122,56 @@ def _fractional_outputs(out_dir: Path, trials: TrialSet, results: dict, series: 
     written["table"] = write_new(out_dir / "table_I.txt", viz.format_fractional_table(results) + "\n")
     if cfg.output.recording:
         written["recording"] = viz.write_fractional_recording(out_dir / "trials.rrd", trials, results)
-    return {k: str(v) for k, v in written.items()}
+    return written
 
 
-def _run_fractional(cfg: ExperimentConfig, out_dir: Path, config_yaml: str, timing: dict) -> dict:
-    t0 = time.perf_counter()
-    rec = simulate_fractional(cfg)
-    timing["simulate_s"] = time.perf_counter() - t0
-    t1 = time.perf_counter()
-    results, series = estimate_fractional(rec.trials, cfg.frf, rec.truth)
-    timing["estimate_s"] = time.perf_counter() - t1
-    results["simulated_s"] = rec.trials.n_trials * rec.trials.n_samples / rec.trials.fs_hz
-    t2 = time.perf_counter()
-    if cfg.output.trials:
-        _save_trials(
-            out_dir / "trials.h5", rec.trials, {"config_yaml": config_yaml, "scenario": rec.scenario.name}
-        )
-    write_new(out_dir / "scene.xml", rec.scene.xml)
-    results["files"] = _fractional_outputs(out_dir, rec.trials, results, series, cfg)
-    timing["outputs_s"] = time.perf_counter() - t2
-    return results
-
-
-def _run_vfs(cfg: ExperimentConfig, out_dir: Path, config_yaml: str, timing: dict) -> dict:
-    from armlab import viz
-
-    t0 = time.perf_counter()
+def _sim_vfs(cfg: ExperimentConfig) -> _Simulated:
     rec = simulate_vfs(cfg)
-    timing["simulate_s"] = time.perf_counter() - t0
-    t1 = time.perf_counter()
-    results, series = estimate_vfs(rec.trials, cfg.vfs, rec.truth)
-    timing["estimate_s"] = time.perf_counter() - t1
-    results["simulated_s"] = rec.trials.n_trials * rec.trials.n_samples / rec.trials.fs_hz
-    t2 = time.perf_counter()
-    if cfg.output.trials:
-        _save_trials(
-            out_dir / "trials.h5",
-            rec.trials,
-            {"config_yaml": config_yaml, "truth_json": json.dumps(rec.truth)},
-        )
     scene = rec.scenes.get("arm") or rec.scenes.get("fixture") or rec.scenes["robot_id"]
-    write_new(out_dir / "scene.xml", scene)
+    return _Simulated(
+        rec.trials,
+        scene,
+        {"truth_json": json.dumps(rec.truth)},
+        lambda: estimate_vfs(rec.trials, cfg.vfs, rec.truth),
+    )
+
+
+def _out_vfs(viz, out_dir: Path, trials: TrialSet, results: dict, series: dict, cfg) -> dict:
     written = {"tables": write_new(out_dir / "tables.txt", viz.format_vfs_tables(results) + "\n")}
     if cfg.output.figures:
         written.update(viz.plot_vfs_figures(results, series, out_dir))
     if cfg.output.recording:
-        written["recording"] = viz.write_vfs_recording(out_dir / "trials.rrd", rec.trials, results)
-    results["files"] = {k: str(v) for k, v in written.items()}
+        written["recording"] = viz.write_vfs_recording(out_dir / "trials.rrd", trials, results)
+    return written
+
+
+# protocol -> (simulate, write its figures/tables/recording); the run itself is shared
+_RUNS = {
+    "conditioning_window": (_sim_conditioning, _out_conditioning),
+    "fractional_elbow": (_sim_fractional, _out_fractional),
+    "virtual_force_sensor": (_sim_vfs, _out_vfs),
+}
+
+
+def _run(cfg: ExperimentConfig, out_dir: Path, config_yaml: str, timing: dict) -> dict:
+    from armlab import viz  # the only place figures and recordings are made
+
+    simulate, outputs = _RUNS[cfg.protocol_name]
+    t0 = time.perf_counter()
+    sim = simulate(cfg)
+    timing["simulate_s"] = time.perf_counter() - t0
+    t1 = time.perf_counter()
+    results, series = sim.estimate()
+    timing["estimate_s"] = time.perf_counter() - t1
+    trials = sim.trials
+    results["simulated_s"] = trials.n_trials * trials.n_samples / trials.fs_hz
+    t2 = time.perf_counter()
+    if cfg.output.trials:
+        _save_trials(out_dir / "trials.h5", trials, {"config_yaml": config_yaml, **sim.attrs})
+    write_new(out_dir / "scene.xml", sim.scene_xml)
+    results["files"] = {k: str(v) for k, v in outputs(viz, out_dir, trials, results, series, cfg).items()}
     timing["outputs_s"] = time.perf_counter() - t2
     return results
-
-
-_RUNS = {
-    "conditioning_window": _run_conditioning,
-    "fractional_elbow": _run_fractional,
-    "virtual_force_sensor": _run_vfs,
-}
 
 
 def run_protocol(cfg: ExperimentConfig, out_dir: Path, config_yaml: str = "") -> dict:
@@ -186,7 +193,7 @@ def run_protocol(cfg: ExperimentConfig, out_dir: Path, config_yaml: str = "") ->
         raise DataError(f"{out_dir} already holds results.json; armlab never overwrites a run")
     timing: dict = {}
     t0 = time.perf_counter()
-    results = _RUNS[cfg.protocol_name](cfg, out_dir, config_yaml, timing)
+    results = _run(cfg, out_dir, config_yaml, timing)
     timing["total_s"] = time.perf_counter() - t0
     results["timing"] = timing
     write_json(out_dir / "results.json", results)
