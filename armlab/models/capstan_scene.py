@@ -34,7 +34,7 @@ from armlab.config.schema import ArmConfig
 from armlab.errors import ConfigError, ModelError
 from armlab.models.capstan_robot import CAPSTAN_RATIO, CapstanDynamics
 from armlab.models.planar_arm import inverse as arm_inverse
-from armlab.models.scene import MUSCLES, model_file, named_id, sensor_slices
+from armlab.models.scene import MUSCLES, compile_mjcf, model_file, named_id, sensor_slices
 from armlab.models.spring_array import SpringArray
 
 os.environ.setdefault("MUJOCO_GL", "egl")
@@ -300,12 +300,7 @@ def build_capstan_scene(
         _add_arm(root, robot, arm, shoulder, reach_m, timestep_s)
     if cfg.drag:
         _add_drag(root, robot, cfg)
-    xml = root.to_xml_string()
-    assets = root.get_assets()
-    try:
-        model = mujoco.MjModel.from_xml_string(xml, assets)
-    except ValueError as exc:
-        raise ModelError(f"composed capstan scene does not compile: {exc}") from None
+    model, xml, assets = compile_mjcf(root, "capstan scene")
     return _index(model, xml, assets, load, mass, shoulder, cfg, arm)
 
 

@@ -21,7 +21,7 @@ import numpy as np
 
 from armlab.config.schema import ElbowConfig, SimConfig
 from armlab.errors import ModelError
-from armlab.models.scene import model_file, sensor_slices
+from armlab.models.scene import compile_mjcf, model_file, sensor_slices
 
 os.environ.setdefault("MUJOCO_GL", "egl")
 from dm_control import mjcf  # noqa: E402
@@ -143,11 +143,7 @@ def _compose(elbow: ElbowConfig, sim: SimConfig) -> tuple[mjcf.RootElement, floa
 def build_direct_drive_scene(elbow: ElbowConfig, sim: SimConfig) -> DirectDriveScene:
     """Compose, compile and index the direct-drive + elbow scene."""
     root, length = _compose(elbow, sim)
-    xml = root.to_xml_string()
-    try:
-        model = mujoco.MjModel.from_xml_string(xml, root.get_assets())
-    except ValueError as exc:
-        raise ModelError(f"composed direct-drive scene does not compile: {exc}") from None
+    model, xml, _ = compile_mjcf(root, "direct-drive scene")
 
     def jid(name: str) -> int:
         return mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, name)

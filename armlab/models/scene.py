@@ -21,6 +21,7 @@ os.environ.setdefault("MUJOCO_GL", "egl")  # dm_control imports a renderer; none
 from dm_control import mjcf  # noqa: E402
 
 __all__ = [
+    "compile_mjcf",
     "named_id",
     "sensor_slices",
     "MODELS_DIR",
@@ -145,6 +146,16 @@ def _compose(arm: ArmConfig, cuff: CuffConfig, robot: RobotConfig, sim: SimConfi
     return root
 
 
+def compile_mjcf(root: mjcf.RootElement, what: str) -> tuple[mujoco.MjModel, str, dict]:
+    """Compile a composed scene: ``(model, xml, assets)``; a :class:`ModelError` naming ``what``."""
+    xml = root.to_xml_string()
+    assets = root.get_assets()
+    try:
+        return mujoco.MjModel.from_xml_string(xml, assets), xml, assets
+    except ValueError as exc:
+        raise ModelError(f"composed {what} does not compile: {exc}") from None
+
+
 def sensor_slices(model: mujoco.MjModel) -> dict[str, slice]:
     """Sensor name (attachment namespace stripped) -> slice into ``sensordata``."""
     out = {}
@@ -165,13 +176,7 @@ def named_id(model: mujoco.MjModel, objtype: mujoco.mjtObj, name: str) -> int:
 
 def build_scene(arm: ArmConfig, cuff: CuffConfig, robot: RobotConfig, sim: SimConfig) -> Scene:
     """Compose, compile and index the lab scene."""
-    root = _compose(arm, cuff, robot, sim)
-    xml = root.to_xml_string()
-    assets = root.get_assets()
-    try:
-        model = mujoco.MjModel.from_xml_string(xml, assets)
-    except ValueError as exc:
-        raise ModelError(f"composed scene does not compile: {exc}") from None
+    model, xml, assets = compile_mjcf(_compose(arm, cuff, robot, sim), "scene")
 
     def jnt(name: str) -> int:
         return mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, name)
