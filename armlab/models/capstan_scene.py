@@ -49,8 +49,6 @@ __all__ = [
 
 LOADS = ("none", "fixture", "arm")
 Load = Literal["none", "fixture", "arm"]
-_HANDLE_Z_M = 0.05  # m, height of the grip above the shoulder axis's base plane (link 2 + handle)
-_EE_Z_M = 0.03  # m, height of link 2's ee site
 # point-like payload: spin inertia small enough that Eq. (5)'s M = m I holds (assumption)
 _PAYLOAD_SPIN_KGM2 = 1e-6
 # rad, the posture at which models/arm_planar/arm_planar_linear.xml sets every muscle's tension
@@ -160,11 +158,22 @@ def _robot(cfg: CapstanConfig, load: str, payload_kg: float) -> mjcf.RootElement
     return robot
 
 
+def _height(robot: mjcf.RootElement, body: str) -> float:
+    """m, height of a body's frame above the shoulder axis's base plane (the MJCF's offsets)."""
+    z = 0.0
+    element = robot.find("body", body)
+    while element is not None and getattr(element, "tag", None) == "body":
+        z += float(element.pos[2]) if element.pos is not None else 0.0
+        element = element.parent
+    return z
+
+
 def _add_springs(root: mjcf.RootElement, robot: mjcf.RootElement, array: SpringArray) -> None:
     grip = robot.find("site", "grip")
+    height = _height(robot, "handle")  # the grip site sits at the handle's origin
     for i, spring in enumerate(array.springs):
         anchor = root.worldbody.add(
-            "site", name=f"anchor_{i}", pos=[spring.anchor[0], spring.anchor[1], _HANDLE_Z_M], size=[0.005]
+            "site", name=f"anchor_{i}", pos=[spring.anchor[0], spring.anchor[1], height], size=[0.005]
         )
         tendon = root.tendon.add(
             "spatial", name=f"spring_{i}", stiffness=spring.stiffness, springlength=[spring.rest_length] * 2
@@ -176,7 +185,10 @@ def _add_springs(root: mjcf.RootElement, robot: mjcf.RootElement, array: SpringA
 
 def _add_drag(root: mjcf.RootElement, robot: mjcf.RootElement, cfg: CapstanConfig) -> None:
     anchor = root.worldbody.add(
-        "site", name="drag_anchor", pos=[cfg.drag_anchor_m[0], cfg.drag_anchor_m[1], _EE_Z_M], size=[0.005]
+        "site",
+        name="drag_anchor",
+        pos=[cfg.drag_anchor_m[0], cfg.drag_anchor_m[1], _height(robot, "link2")],  # the ee site's plane
+        size=[0.005],
     )
     tendon = root.tendon.add(
         "spatial",
@@ -227,7 +239,10 @@ def _add_arm(
     _recentre_muscles(arm_model, np.array([0.0, reach_m]))
     # the arm's frame (x lateral right, y anterior) turned by +90 deg: anterior is the robot's -x
     mount = root.worldbody.add(
-        "site", name="shoulder_mount", pos=[shoulder[0], shoulder[1], _HANDLE_Z_M], euler=[0, 0, np.pi / 2]
+        "site",
+        name="shoulder_mount",
+        pos=[shoulder[0], shoulder[1], _height(robot, "handle")],
+        euler=[0, 0, np.pi / 2],
     )
     mount.attach(arm_model)
     hand = arm_model.find("site", "hand")
