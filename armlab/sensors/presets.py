@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, fields
+from typing import ClassVar
 
 import numpy as np
 
@@ -155,7 +156,42 @@ CHANNEL_SPEC_FIELDS: dict[str, str] = {
 
 
 @dataclass(frozen=True, kw_only=True)
-class SensorSuite:
+class _Suite:
+    """A set of named channel models; ``CHANNELS`` maps clean channel names to fields, in the fixed
+    order of the random streams (new channels are appended, never inserted)."""
+
+    CHANNELS: ClassVar[dict[str, str]] = {}
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            value = getattr(self, f.name)
+            if not isinstance(value, ChannelSpec):
+                raise ConfigError(
+                    f"{type(self).__name__}.{f.name} must be a ChannelSpec, got {type(value).__name__}"
+                )
+
+    @classmethod
+    def ideal(cls):
+        """Perfect sensors everywhere: measured channels equal the clean ones."""
+        return cls(**{f.name: ChannelSpec.ideal() for f in fields(cls)})
+
+    @classmethod
+    def channel_fields(cls) -> dict[str, str]:
+        """Clean channel name -> field, in the fixed order of the random streams."""
+        return cls.CHANNELS
+
+    def spec_for(self, channel: str) -> ChannelSpec:
+        """The spec applied to clean channel ``channel`` (a key of :meth:`channel_fields`)."""
+        try:
+            return getattr(self, self.CHANNELS[channel])
+        except KeyError:
+            raise ConfigError(
+                f"no sensor model for channel {channel!r}; valid channels: {list(self.CHANNELS)}"
+            ) from None
+
+
+@dataclass(frozen=True, kw_only=True)
+class SensorSuite(_Suite):
     """The sensors the conditioning-window protocol records.
 
     Attributes:
@@ -165,16 +201,11 @@ class SensorSuite:
         joint_torque: robot joint torque sensors, N·m (channel ``robot_tau``).
     """
 
+    CHANNELS: ClassVar[dict[str, str]] = CHANNEL_SPEC_FIELDS
     ft_force: ChannelSpec
     ft_torque: ChannelSpec
     encoder: ChannelSpec
     joint_torque: ChannelSpec
-
-    def __post_init__(self) -> None:
-        for f in fields(self):
-            value = getattr(self, f.name)
-            if not isinstance(value, ChannelSpec):
-                raise ConfigError(f"SensorSuite.{f.name} must be a ChannelSpec, got {type(value).__name__}")
 
     @classmethod
     def realistic(cls) -> SensorSuite:
@@ -182,27 +213,6 @@ class SensorSuite:
         return cls(
             ft_force=JR3_FORCE, ft_torque=JR3_TORQUE, encoder=LWR_ENCODER, joint_torque=LWR_JOINT_TORQUE
         )
-
-    @classmethod
-    def ideal(cls) -> SensorSuite:
-        """Perfect sensors everywhere: measured channels equal the clean ones."""
-        ideal = ChannelSpec.ideal()
-        return cls(ft_force=ideal, ft_torque=ideal, encoder=ideal, joint_torque=ideal)
-
-    @staticmethod
-    def channel_fields() -> dict[str, str]:
-        """Clean channel name -> field, in the fixed order of the random streams."""
-        return CHANNEL_SPEC_FIELDS
-
-    def spec_for(self, channel: str) -> ChannelSpec:
-        """The spec applied to clean channel ``channel`` (a key of :meth:`channel_fields`)."""
-        fields_ = self.channel_fields()
-        try:
-            return getattr(self, fields_[channel])
-        except KeyError:
-            raise ConfigError(
-                f"no sensor model for channel {channel!r}; valid channels: {list(fields_)}"
-            ) from None
 
 
 def measure(
@@ -248,39 +258,34 @@ def measure(
 
 
 @dataclass(frozen=True, kw_only=True)
-class CapstanSensorSuite(SensorSuite):
+class CapstanSensorSuite(_Suite):
     """The sensors of the virtual-force-sensor lab (seeds/003 Sec. II-B).
 
     Attributes:
         encoder: motor encoders, link-side rad (channel ``theta``).
+        motor_torque: the controller's recorded torque command, N·m (channel ``tau``; ideal in
+            the realistic suite: the paper records it from the controller, Table II).
         accelerometer: ADXL203 x, y, m/s² (channel ``acc_site``).
         ft_force: F/T sensor x, y, N (channel ``ft_site``).
-        motor_torque: the controller's recorded torque command, N·m (channel ``tau``; ideal by
-            default: the paper records it from the controller, Table II).
     """
 
-    ft_force: ChannelSpec
+    CHANNELS: ClassVar[dict[str, str]] = {
+        "theta": "encoder",
+        "tau": "motor_torque",
+        "acc_site": "accelerometer",
+        "ft_site": "ft_force",
+    }
     encoder: ChannelSpec
-    accelerometer: ChannelSpec
     motor_torque: ChannelSpec
-    ft_torque: ChannelSpec = ChannelSpec()
-    joint_torque: ChannelSpec = ChannelSpec()
-
-    @staticmethod
-    def channel_fields() -> dict[str, str]:
-        return {"theta": "encoder", "tau": "motor_torque", "acc_site": "accelerometer", "ft_site": "ft_force"}
+    accelerometer: ChannelSpec
+    ft_force: ChannelSpec
 
     @classmethod
     def realistic(cls) -> CapstanSensorSuite:
         """Capstan encoders, ADXL203 accelerometer, JR3 50M31 F/T sensor, exact torque command."""
         return cls(
-            ft_force=JR3_50M31_FORCE,
             encoder=CAPSTAN_ENCODER,
+            motor_torque=ChannelSpec.ideal(),
             accelerometer=ADXL203_ACCEL,
-            motor_torque=ChannelSpec(),
+            ft_force=JR3_50M31_FORCE,
         )
-
-    @classmethod
-    def ideal(cls) -> CapstanSensorSuite:
-        ideal = ChannelSpec.ideal()
-        return cls(ft_force=ideal, encoder=ideal, accelerometer=ideal, motor_torque=ideal)
