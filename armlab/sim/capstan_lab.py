@@ -115,20 +115,16 @@ def simulate_capstan(
     data = [mujoco.MjData(model) for _ in range(min(nthread, n_trials))]
     state = np.tile(np.asarray(initial_state, float), (n_trials, 1))
     sd_out = np.empty((n_trials, n_samples, model.nsensordata))
-    ref_out = np.empty((n_trials, n_samples, 2))
     with mj_rollout.Rollout(nthread=len(data)) as runner:
         for c0 in range(0, n_steps, _CHUNK_STEPS):
-            c1 = min(n_steps, c0 + _CHUNK_STEPS)
-            t = (np.arange(c0, c1) - n_settle) * dt
-            ctrl = np.zeros((n_trials, c1 - c0, model.nu))
+            steps = np.arange(c0, min(n_steps, c0 + _CHUNK_STEPS)) - n_settle  # 0 at the first sample
+            t = steps * dt
+            ctrl = np.zeros((n_trials, len(steps), model.nu))
             for k, ref in enumerate(references):
-                r = theta0 + ref.value(t)
-                ctrl[k][:, scene.motor_act] = r + (kd / kp) * ref.derivative(t)
-                keep = (t >= -0.5 * dt) & ((np.arange(c0, c1) - n_settle) % sub == 0)
-                ref_out[k, (np.arange(c0, c1)[keep] - n_settle) // sub] = r[keep]
+                ctrl[k][:, scene.motor_act] = theta0 + ref.value(t) + (kd / kp) * ref.derivative(t)
             if muscle_ctrl is not None:
                 ctrl[:, :, scene.muscle_act] = muscle_ctrl
-            states, sd = runner.rollout(model, data, state, ctrl, nstep=c1 - c0)
+            states, sd = runner.rollout(model, data, state, ctrl, nstep=len(steps))
             state = states[:, -1]
             bad = sum(int(d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number) for d in data)
             if bad or not np.all(np.isfinite(state)):  # MuJoCo resets a diverged state and warns
@@ -136,9 +132,9 @@ def simulate_capstan(
                     f"the capstan lab diverged before t = {t[-1]:.3f} s (unstable acceleration); "
                     f"lower sim.timestep_s (now {dt} s) or the cable stiffness"
                 )
-            steps = np.arange(c0, c1) - n_settle
             keep = (steps >= 0) & (steps % sub == 0)
             sd_out[:, steps[keep] // sub] = sd[:, keep]
     out = _pairs(scene, sd_out)
-    out["reference"] = ref_out
+    t_samples = np.arange(n_samples) / fs_hz
+    out["reference"] = np.stack([theta0 + ref.value(t_samples) for ref in references])
     return out
