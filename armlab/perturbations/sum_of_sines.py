@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from fractions import Fraction
 
 import numpy as np
 
@@ -19,7 +20,17 @@ from armlab.errors import ConfigError
 
 __all__ = ["SumOfSines", "sum_of_sines"]
 
-_GRID_PER_PERIOD = 20000  # samples of one period used to measure the peak-to-peak range
+_GRID_PER_PERIOD = 20000  # fewest samples of one period used to measure the peak-to-peak range
+_GRID_PER_CYCLE = 1000  # fewest samples per cycle of the highest component (peak error < 5e-6)
+_MAX_DENOMINATOR = 1000  # frequencies are read as fractions p/q Hz with q <= this
+
+
+def _common_period(freqs_hz: np.ndarray) -> float:
+    """s, the period of a sum of sines: 1 / gcd of the frequencies as fractions."""
+    fr = [Fraction(float(f)).limit_denominator(_MAX_DENOMINATOR) for f in freqs_hz]
+    den = math.lcm(*(f.denominator for f in fr))
+    num = math.gcd(*(f.numerator * (den // f.denominator) for f in fr))
+    return den / num
 
 
 @dataclass(frozen=True, eq=False)
@@ -103,10 +114,11 @@ def sum_of_sines(
     freqs = np.linspace(lo, hi, n_sines)
     phases = rng.uniform(0.0, 2 * np.pi, size=(n_joints, n_sines))
     unit = SumOfSines(freqs, np.ones(n_joints), phases)
-    # the sum repeats with the common period of its frequencies (a grid of spacing lo when they
-    # are multiples of it, as the evenly spaced grid from lo is); measure its range over one period
-    period = 1.0 / lo if np.allclose(freqs / lo, np.round(freqs / lo)) else 100.0 / lo
-    t = np.linspace(0.0, period, _GRID_PER_PERIOD, endpoint=False)
+    # the sum repeats with the common period of its frequencies, 1 / gcd(f_i) (frequencies read as
+    # fractions of at most _MAX_DENOMINATOR); measure its range over one period, with at least
+    # _GRID_PER_CYCLE samples per cycle of the highest component
+    period = _common_period(freqs)
+    t = np.linspace(0.0, period, max(_GRID_PER_PERIOD, int(_GRID_PER_CYCLE * hi * period)), endpoint=False)
     v = unit.value(t)
     ptp = v.max(axis=0) - v.min(axis=0)
     return SumOfSines(freqs, range_rad / ptp, phases, fade_s)

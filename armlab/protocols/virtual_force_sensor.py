@@ -137,6 +137,7 @@ def simulate_vfs(cfg: ExperimentConfig) -> VfsRecording:
             ),
         )
     if v.trials_per_config:
+        truth["fixture"].update({m: {"m": TABLE_I_PAYLOADS_KG[m]} for m in v.payloads})
         for k_label in v.stiffness:
             field = TABLE_I_STIFFNESS[k_label]
             array = table_i_array(k_label)
@@ -147,7 +148,6 @@ def simulate_vfs(cfg: ExperimentConfig) -> VfsRecording:
                 "x0": [field.x0, field.y0],
             }
             for m_label in v.payloads:
-                truth["fixture"][m_label] = {"m": TABLE_I_PAYLOADS_KG[m_label]}
                 scene = _scene(cfg, "fixture", array=array, payload_kg=TABLE_I_PAYLOADS_KG[m_label])
                 scenes.setdefault("fixture", scene.xml)
                 theta0 = scene.dynamics.ik(np.array([field.x0, field.y0]))
