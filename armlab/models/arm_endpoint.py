@@ -117,7 +117,7 @@ def endpoint_truth(scene: CapstanScene, state: np.ndarray) -> EndpointTruth:
     full = np.zeros((model.nv, model.nv))
     mujoco.mj_fullM(model, data, full)
     m_q = full[np.ix_(scene.arm_dof, scene.arm_dof)]
-    hand = mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_SITE, "arm_planar/hand")
+    hand = scene.hand_site
     jacp = np.zeros((3, model.nv))
     mujoco.mj_jacSite(model, data, jacp, None, hand)
     jac = jacp[:2, scene.arm_dof]

@@ -88,6 +88,7 @@ class CapstanScene:
     shoulder_pos: np.ndarray
     arm_l1: float = 0.0
     arm_l2: float = 0.0
+    hand_site: int = -1  # the arm's hand site (scenes with an arm)
 
     def sensor(self, sensordata: np.ndarray, name: str) -> np.ndarray:
         """Slice one named sensor out of ``(..., nsensordata)`` sensor data."""
@@ -329,6 +330,7 @@ def _index(
     arm_j: list[int] = []
     muscles: list[int] = []
     l1 = l2 = 0.0
+    hand = -1
     if load == "arm":
         arm_j = [named_id(model, jnt, f"{arm.model}/{n}") for n in ("shoulder", "elbow")]
         muscles = [named_id(model, mujoco.mjtObj.mjOBJ_ACTUATOR, f"{arm.model}/{n}") for n in MUSCLES]
@@ -359,4 +361,5 @@ def _index(
         shoulder_pos=shoulder,
         arm_l1=l1,
         arm_l2=l2,
+        hand_site=hand,
     )
