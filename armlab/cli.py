@@ -21,7 +21,7 @@ from armlab.errors import ArmlabError, ConfigError
 __all__ = ["main"]
 
 GROUPS = ("protocol", "arm", "robot", "sensors", "scenario", "estimator")
-VERBS = ("run", "estimate", "view", "fit-joint")
+VERBS = ("run", "estimate", "view", "fit-joint", "diagnose", "effects", "diagnose-benchmark")
 
 
 def _fail(msg: str) -> int:
@@ -42,7 +42,13 @@ def _usage() -> str:
         "  view <run_dir>                                  open the run's rerun recording (trials.rrd)\n"
         "  fit-joint <csv|folder> [frf.<field>=<value>] [out=<dir>]\n"
         "                                                  impedance/admittance fits of real 1-DoF joint\n"
-        "                                                  recordings (t_s,position_rad,torque_Nm CSV)\n\n"
+        "                                                  recordings (t_s,position_rad,torque_Nm CSV)\n"
+        "  diagnose data=<file|folder> protocol=<name> [diagnosis.<field>=<value>] [out=<dir>]\n"
+        "                                                  where the sim-to-real gap lies, which effect\n"
+        "                                                  explains it, how far it shrinks\n"
+        "  effects [protocol=<name>]                       list the catalogue of unmodelled effects\n"
+        "  diagnose-benchmark [referee.<f>=<v>] [diagnosis.<f>=<v>] [out=<dir>]\n"
+        "                                                  blind referee of the diagnosis\n\n"
         f"protocols: {protocols}\n"
         "config groups: " + ", ".join(f"{g}=<{'|'.join(available_options(g))}>" for g in GROUPS) + "\n"
         "examples:\n"
@@ -64,8 +70,26 @@ def compose(overrides: list[str]):
 
     for item in overrides:
         key, sep, value = item.partition("=")
-        if sep and key in GROUPS and value not in available_options(key):
+        if sep and key.lstrip("+") == "effects":
+            names = [n.strip() for n in value.strip().strip("[]").split(",") if n.strip()]
+            unknown = [n for n in names if n not in available_options("effects")]
+            if unknown:
+                raise ConfigError(f"unknown effect(s) {unknown}; valid: {available_options('effects')}")
+        elif sep and key in GROUPS and value not in available_options(key):
             raise ConfigError(f"unknown {key} {value!r}; valid: {available_options(key)}")
+    selected = [
+        n.strip()
+        for o in overrides
+        if o.lstrip("+").startswith("effects=")
+        for n in o.partition("=")[2].strip("[] ").split(",")
+    ]
+    for item in overrides:
+        parts = item.partition("=")[0].split(".")
+        if parts[0] == "effects" and len(parts) > 2 and parts[1] not in selected:
+            raise ConfigError(
+                f"{item}: effect {parts[1]!r} is not switched on; add effects=[{parts[1]}] "
+                f"(selected: {selected or 'none'})"
+            )
     register_configs()
     try:
         with initialize_config_dir(config_dir=str(CONFIG_DIR), version_base="1.3"):
@@ -177,13 +201,86 @@ def _fit_joint(args: list[str]) -> int:
     return 0
 
 
+def _keyed(args: list[str], keys: tuple[str, ...], prefixes: tuple[str, ...]) -> tuple[dict, list[str]]:
+    """Split ``key=value`` arguments into the named keys and the prefixed overrides."""
+    named, rest = {}, []
+    for item in args:
+        key, sep, value = item.partition("=")
+        if not sep:
+            raise ConfigError(f"argument {item!r} must look like key=value")
+        if key in keys:
+            named[key] = value
+        elif key.split(".", 1)[0] in prefixes and "." in key:
+            rest.append(item)
+        else:
+            valid = [f"{k}=" for k in keys] + [f"{p}.<field>=" for p in prefixes]
+            raise ConfigError(f"unknown argument {item!r}; valid: {valid}")
+    return named, rest
+
+
+def _diagnose(args: list[str]) -> int:
+    from armlab.diagnosis.report import format_summary
+    from armlab.protocols.diagnosis_run import default_diagnosis_dir, run_diagnosis
+
+    named, rest = _keyed(args, ("data", "protocol", "out"), ("diagnosis",))
+    missing = [k for k in ("data", "protocol") if not named.get(k)]
+    if missing:
+        return _fail(f"diagnose needs {missing}: armlab diagnose data=<file|folder> protocol=<name>")
+    out = Path(named["out"]) if named.get("out") else default_diagnosis_dir()
+    out, results = run_diagnosis(Path(named["data"]), named["protocol"], rest, out)
+    print(format_summary(results))
+    print(f"outputs: {out}")
+    return 0
+
+
+def _effects(args: list[str]) -> int:
+    from armlab.config.effects import EFFECTS, effect_names
+
+    named, _ = _keyed(args, ("protocol",), ())
+    protocol = named.get("protocol")
+    names = effect_names(protocol)
+    if protocol is not None and not names:
+        protocols = sorted({p for c in EFFECTS.values() for p in c.PROTOCOLS})
+        return _fail(f"no effects for protocol {protocol!r}; valid protocols: {protocols}")
+    for name in names:
+        cls = EFFECTS[name]
+        params = ", ".join(f"{k}={v:g}" for k, v in cls().params().items())
+        print(f"{name}  [{cls.LEVEL}]  {params}")
+        print(f"    {cls.PHYSICS}")
+        print(f"    typical: {cls.SOURCE}")
+        print(f"    protocols: {', '.join(cls.PROTOCOLS)}")
+        for other, trial in cls.CONFUSABLE.items():
+            print(f"    confusable with {other}: separate with {trial}")
+    return 0
+
+
+def _benchmark(args: list[str]) -> int:
+    from armlab.diagnosis.benchmark_summary import format_benchmark
+    from armlab.protocols.diagnosis_run import default_diagnosis_dir, run_benchmark
+
+    named, rest = _keyed(args, ("out",), ("referee", "diagnosis"))
+    out = Path(named["out"]) if named.get("out") else default_diagnosis_dir("diagnose-benchmark")
+    out, summary = run_benchmark(rest, out)
+    print((out / "benchmark.md").read_text() if (out / "benchmark.md").is_file() else format_benchmark)
+    print(f"outputs: {out}")
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     args = sys.argv[1:] if argv is None else list(argv)
     if not args or args[0] in ("-h", "--help", "help"):
         print(_usage())
         return 0
     verb, rest = args[0], args[1:]
-    handlers = {"run": _run, "estimate": _estimate, "view": _view, "fit-joint": _fit_joint}
+    handlers = {
+        "run": _run,
+        "estimate": _estimate,
+        "view": _view,
+        "fit-joint": _fit_joint,
+        "diagnose": _diagnose,
+        "effects": _effects,
+        "diagnose-benchmark": _benchmark,
+    }
     if verb not in handlers:
         return _fail(f"unknown verb {verb!r}; valid: {list(VERBS)} (see armlab --help)")
     try:

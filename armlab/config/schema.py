@@ -11,6 +11,7 @@ import math
 from dataclasses import dataclass, field
 
 from armlab.config.capstan import CapstanConfig, VfsConfig
+from armlab.config.effects import EffectsConfig
 from armlab.errors import ConfigError
 
 __all__ = [
@@ -18,6 +19,7 @@ __all__ = [
     "CapstanConfig",
     "CuffConfig",
     "DirectDriveConfig",
+    "EffectsConfig",
     "ElbowConfig",
     "FrfConfig",
     "EstimatorConfig",
@@ -404,6 +406,7 @@ class ExperimentConfig:
     scenario: ScenarioConfig = field(default_factory=ScenarioConfig)
     estimator: EstimatorConfig = field(default_factory=EstimatorConfig)
     output: OutputConfig = field(default_factory=OutputConfig)
+    effects: EffectsConfig = field(default_factory=EffectsConfig)  # configs/effects/, all off by default
 
     def __post_init__(self) -> None:
         _check(self.seed >= 0, f"seed must be a non-negative integer, got {self.seed}")

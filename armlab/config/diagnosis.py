@@ -1,0 +1,94 @@
+"""Typed configuration of ``armlab diagnose`` and of its referee ``armlab diagnose-benchmark``."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from hydra.core.config_store import ConfigStore
+
+from armlab.errors import ConfigError
+
+__all__ = [
+    "DIAGNOSIS_PROTOCOLS",
+    "DiagnosisConfig",
+    "RefereeConfig",
+    "register_diagnosis_configs",
+]
+
+#: Protocols ``armlab diagnose`` knows how to simulate and score.
+DIAGNOSIS_PROTOCOLS = ("joint_1dof",)
+
+
+def _check(cond: bool, msg: str) -> None:
+    if not cond:
+        raise ConfigError(msg)
+
+
+@dataclass(kw_only=True)
+class DiagnosisConfig:
+    """How the measured trials are prepared, scored, and how effects are selected."""
+
+    candidates: list[str] | None = None  # None: every catalogue effect the protocol can simulate
+    exclude: list[str] = field(default_factory=list)  # candidates left out (e.g. to test "unknown")
+    fs_fit_hz: float = 250.0  # Hz, models are fitted at this rate (integer decimation)
+    band_hz: float = 40.0  # Hz, top of the analysed band (issue 5's bands end at 40 Hz)
+    highpass_hz: float = 0.3  # Hz, below: voluntary/tonic torque, not scored
+    slow_hz: float = 0.3  # Hz, tonic-level covariate of the co-contraction candidate
+    holdout_fraction: float = 1.0 / 3.0  # last third held out (REKLAB: fit 0-40 s, score 40-60 s)
+    min_duration_s: float = 6.0  # s, shortest trial accepted
+    per_trial: bool = False  # diagnose every trial on its own (different subjects/conditions)
+    max_effects: int = 3
+    bic_margin: float = 10.0  # penalised-score improvement needed to accept an effect
+    min_step_fraction: float = 0.1  # of the nominal excess gap, per accepted effect
+    min_floor_fraction: float = 0.1  # of the noise floor, per accepted effect
+    min_first_explained: float = 0.4  # of the nominal excess gap, by the first effect
+    none_tolerance: float = 0.25  # nominal excess within this fraction of the floor -> "none"
+    indistinct_ratio: float = 0.9  # runner-up reduction / winner's above this -> flagged
+
+    def __post_init__(self) -> None:
+        _check(self.fs_fit_hz > 0 and self.band_hz > 0, "diagnosis.fs_fit_hz and band_hz must be > 0")
+        _check(
+            0 < self.highpass_hz < self.band_hz,
+            f"diagnosis.highpass_hz must lie in (0, band_hz={self.band_hz}), got {self.highpass_hz}",
+        )
+        _check(
+            0.05 <= self.holdout_fraction <= 0.5,
+            f"diagnosis.holdout_fraction must lie in [0.05, 0.5], got {self.holdout_fraction}",
+        )
+        _check(1 <= self.max_effects <= 3, f"diagnosis.max_effects must be 1, 2 or 3, got {self.max_effects}")
+        _check(self.min_duration_s > 0, "diagnosis.min_duration_s must be > 0")
+        for name in ("min_step_fraction", "min_floor_fraction", "min_first_explained", "none_tolerance"):
+            _check(getattr(self, name) >= 0, f"diagnosis.{name} must be >= 0")
+
+
+@dataclass(kw_only=True)
+class RefereeConfig:
+    """The blind benchmark: pseudo-real datasets from the higher-fidelity simulation."""
+
+    protocol: str = "joint_1dof"
+    replicates: int = 10  # per class
+    seed: int = 1000  # evaluation seeds start here; tuning used seeds 0..999
+    n_trials: int = 4  # trials per dataset (two perturbation sequences, each recorded twice)
+    trial_s: float = 30.0  # s per trial
+    fs_hz: float = 1000.0  # Hz, recorded rate
+    noise_std_Nm: float = 0.15  # N·m, torque sensor noise (JR3/ATI class at the ankle)
+    enr_range: tuple[float, float] = (0.5, 4.0)  # effect-to-noise ratio, log-uniform
+    classes: list[str] | None = None  # None: every class of the protocol
+    jobs: int = 2  # datasets diagnosed in parallel (joblib)
+
+    def __post_init__(self) -> None:
+        _check(
+            self.protocol in DIAGNOSIS_PROTOCOLS,
+            f"referee protocol {self.protocol!r} is not available; choose one of {list(DIAGNOSIS_PROTOCOLS)}",
+        )
+        _check(self.replicates >= 1 and self.n_trials >= 2, "referee.replicates >= 1 and n_trials >= 2")
+        lo, hi = self.enr_range
+        _check(0 < lo <= hi, f"referee.enr_range must satisfy 0 < lo <= hi, got {self.enr_range}")
+        _check(self.noise_std_Nm > 0, "referee.noise_std_Nm must be > 0")
+
+
+def register_diagnosis_configs() -> None:
+    """Register the schemas in Hydra's ConfigStore (idempotent)."""
+    cs = ConfigStore.instance()
+    cs.store(name="diagnosis_config", node=DiagnosisConfig)
+    cs.store(name="referee_config", node=RefereeConfig)

@@ -1,0 +1,232 @@
+"""Measured 1-DoF joint trials prepared for the diagnosis: band-limited, decimated, split.
+
+Every trial (position in, torque out, as imported by :mod:`armlab.data.joint_import`) becomes a
+:class:`PreparedTrial` at the fitting rate:
+
+1. zero-phase 4th-order Butterworth low-pass at ``band_hz`` of position and torque at the
+   recorded rate (anti-alias; identical on both channels, so their relative timing is kept);
+2. velocity and acceleration by central differences at the recorded rate;
+3. decimation to ``fs_fit_hz`` (every q-th sample);
+4. the slow torque ``m(t)`` (zero-phase low-pass at ``slow_hz``, zero mean, unit rms): the
+   subject's tonic contraction level, the covariate of the co-contraction candidate.
+
+The gap is scored in the perturbation band ``[highpass_hz, band_hz]``: below ``highpass_hz`` the
+torque is dominated by the subject's voluntary/tonic fluctuations, which no protocol model
+predicts. Models are fitted on the first ``1 - holdout_fraction`` of every trial and scored on
+the rest (the REKLAB lab's own 0-40 s / 40-60 s split).
+
+Noise floor: the torque noise variance in the scoring band, from repeated trials (trials whose
+positions correlate above 0.99 are repeats of one perturbation: ``var(y_i - y_j) / 2``) or, with
+no repeats, from the second differences of the raw torque (Rice 1984, Ann. Statist. 12:1215:
+``E[(Δ²y)²] = 6σ²`` for white noise on a signal slow compared with the sampling), scaled to the
+band on the assumption that the sensor noise is white.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import signal
+
+from armlab.errors import DataError
+
+__all__ = [
+    "NoiseFloor",
+    "PreparedTrial",
+    "highpass_sos",
+    "noise_floor",
+    "prepare_trials",
+    "repeat_groups",
+]
+
+_REPEAT_CORR = 0.99  # 1, position correlation above which two trials are repeats
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class PreparedTrial:
+    """One trial at the fitting rate; all arrays (n,).
+
+    Attributes:
+        name: the trial's name.
+        t_s: s, time from the trial's start.
+        x, v, a: rad, rad/s, rad/s², band-limited joint angle and its derivatives.
+        y: N·m, band-limited measured torque.
+        m: 1, slow torque (tonic level), zero mean and unit rms.
+        train: bool mask of the fitting part; ``~train`` is held out.
+        fs_hz: Hz, the fitting rate.
+        raw_fs_hz: Hz, the recorded rate.
+    """
+
+    name: str
+    t_s: np.ndarray
+    x: np.ndarray
+    v: np.ndarray
+    a: np.ndarray
+    y: np.ndarray
+    m: np.ndarray
+    train: np.ndarray
+    fs_hz: float
+    raw_fs_hz: float
+
+
+def _zero_phase_lowpass(z: np.ndarray, fc: float, fs: float, order: int = 4) -> np.ndarray:
+    sos = signal.butter(order, fc, fs=fs, output="sos")
+    return signal.sosfiltfilt(sos, z, axis=-1)
+
+
+def prepare_trials(
+    records,
+    *,
+    fs_fit_hz: float,
+    band_hz: float,
+    holdout_fraction: float,
+    slow_hz: float,
+    min_duration_s: float,
+) -> tuple[PreparedTrial, ...]:
+    """Band-limit, differentiate, decimate and split imported trials.
+
+    Args:
+        records: sequence of objects with ``name``, ``position`` (n,) rad, ``torque`` (n,) N·m and
+            ``fs_hz`` (e.g. :class:`armlab.data.joint_import.JointRecord`).
+        fs_fit_hz: Hz, rate the models are fitted at (rounded to an integer decimation).
+        band_hz: Hz, upper edge of the analysed band; below 0.45 of the fitting rate.
+        holdout_fraction: the last fraction of every trial held out for scoring.
+        slow_hz: Hz, cut-off of the slow (tonic) torque.
+        min_duration_s: s, shortest acceptable trial.
+
+    Raises:
+        DataError: no trials, sample rates that differ, a trial too short, or a band the
+            sample rate cannot carry.
+    """
+    records = list(records)
+    if not records:
+        raise DataError("no trials to diagnose")
+    rates = {r.name: float(r.fs_hz) for r in records}
+    fs = next(iter(rates.values()))
+    if any(abs(f - fs) > 1e-6 * fs for f in rates.values()):
+        raise DataError(f"trials have different sample rates {rates}; resample them to one rate first")
+    q = max(1, int(round(fs / fs_fit_hz)))
+    fs_fit = fs / q
+    if band_hz >= 0.45 * fs_fit:
+        raise DataError(
+            f"band {band_hz} Hz needs a fitting rate above {band_hz / 0.45:.0f} Hz; "
+            f"the data give {fs_fit:g} Hz"
+        )
+    out = []
+    for r in records:
+        n = np.asarray(r.position).size
+        if n / fs < min_duration_s:
+            raise DataError(
+                f"trial {r.name!r} lasts {n / fs:.2f} s; the diagnosis needs at least {min_duration_s:g} s "
+                "(training part, held-out part and the filter edges)"
+            )
+        x = _zero_phase_lowpass(np.asarray(r.position, float), band_hz, fs)
+        y = _zero_phase_lowpass(np.asarray(r.torque, float), band_hz, fs)
+        v = np.gradient(x, 1.0 / fs)
+        a = np.gradient(v, 1.0 / fs)
+        slow = _zero_phase_lowpass(np.asarray(r.torque, float), slow_hz, fs, order=2)[::q]
+        slow = slow - slow.mean()
+        rms = float(np.sqrt(np.mean(slow**2)))
+        m = slow / rms if rms > 0 else slow
+        nd = x[::q].size
+        train = np.arange(nd) < int(round((1.0 - holdout_fraction) * nd))
+        out.append(
+            PreparedTrial(
+                name=r.name,
+                t_s=np.arange(nd) / fs_fit,
+                x=x[::q],
+                v=v[::q],
+                a=a[::q],
+                y=y[::q],
+                m=m,
+                train=train,
+                fs_hz=fs_fit,
+                raw_fs_hz=fs,
+            )
+        )
+    return tuple(out)
+
+
+def repeat_groups(records) -> list[list[int]]:
+    """Indices of trials that repeat one perturbation (position correlation > 0.99), groups of >= 2."""
+    pos = [np.asarray(r.position, float) for r in records]
+    groups: list[list[int]] = []
+    used: set[int] = set()
+    for i in range(len(pos)):
+        if i in used:
+            continue
+        g = [i]
+        for j in range(i + 1, len(pos)):
+            if (
+                j not in used
+                and pos[j].size == pos[i].size
+                and np.corrcoef(pos[i], pos[j])[0, 1] > _REPEAT_CORR
+            ):
+                g.append(j)
+        if len(g) > 1:
+            groups.append(g)
+            used.update(g)
+    return groups
+
+
+@dataclass(frozen=True, kw_only=True)
+class NoiseFloor:
+    """Torque noise in the scoring band.
+
+    Attributes:
+        variance_Nm2: N·m², per-sample noise variance in the band.
+        psd: (n_f,) N·m²/Hz one-sided noise spectral density on ``f_hz`` (flat when estimated
+            from second differences).
+        f_hz: (n_f,) Hz.
+        source: ``"repeats"`` or ``"second differences (white noise assumed)"``.
+    """
+
+    variance_Nm2: float
+    psd: np.ndarray
+    f_hz: np.ndarray
+    source: str
+
+
+def highpass_sos(fs_hz: float, highpass_hz: float) -> np.ndarray:
+    """Second-order sections of the scoring high-pass (2nd-order Butterworth, applied zero-phase)."""
+    return signal.butter(2, highpass_hz, btype="highpass", fs=fs_hz, output="sos")
+
+
+def noise_floor(records, prepared, *, band_hz: float, highpass_hz: float, nperseg: int = 512) -> NoiseFloor:
+    """The noise floor in the scoring band (see the module docstring).
+
+    Args:
+        records: the imported trials (raw rate).
+        prepared: their :class:`PreparedTrial` versions.
+        band_hz: Hz, the anti-alias cut-off used by :func:`prepare_trials`.
+        highpass_hz: Hz, the scoring high-pass.
+        nperseg: Welch segment length at the fitting rate.
+    """
+    fs = prepared[0].fs_hz
+    hp = highpass_sos(fs, highpass_hz)
+    groups = repeat_groups(records)
+    if groups:
+        diffs = [
+            (signal.sosfiltfilt(hp, prepared[g[k]].y) - signal.sosfiltfilt(hp, prepared[g[0]].y))
+            / np.sqrt(2.0)
+            for g in groups
+            for k in range(1, len(g))
+        ]
+        var = float(np.mean([np.var(d) for d in diffs]))
+        f, p = signal.welch(np.stack(diffs), fs=fs, nperseg=min(nperseg, diffs[0].size))
+        return NoiseFloor(variance_Nm2=var, psd=p.mean(axis=0), f_hz=f, source="repeats")
+    raw_fs = prepared[0].raw_fs_hz
+    s2 = float(np.mean([np.mean(np.diff(np.asarray(r.torque, float), 2) ** 2) / 6.0 for r in records]))
+    f = np.fft.rfftfreq(nperseg, 1.0 / fs)
+    # white noise of variance s2 over 0..raw_fs/2 has the one-sided density 2*s2/raw_fs; the
+    # zero-phase (forward-backward) filters apply their power gain twice
+    _, h_lp = signal.sosfreqz(signal.butter(4, band_hz, fs=raw_fs, output="sos"), worN=f, fs=raw_fs)
+    _, h_hp = signal.sosfreqz(hp, worN=f, fs=fs)
+    psd = 2.0 * s2 / raw_fs * np.abs(h_lp) ** 4 * np.abs(h_hp) ** 4
+    return NoiseFloor(
+        variance_Nm2=float(np.trapezoid(psd, f)),
+        psd=psd,
+        f_hz=f,
+        source="second differences of the raw torque (white noise assumed)",
+    )

@@ -1,0 +1,306 @@
+"""Candidate models of the 1-DoF joint protocol: the nominal joint plus catalogue effects.
+
+The nominal simulation of a position-imposed joint is its inverse dynamics, linear in the
+parameters: ``torque = I·θ̈ + B·θ̇ + K·θ`` (the offset is removed by the scoring high-pass).
+Each catalogue effect changes that model in one of three ways, written here in the same
+linear-in-parameters form as the MuJoCo model of :mod:`armlab.sim.joint_1dof` (checked against
+it in the tests):
+
+- **additive** columns (``reflex``, ``joint_friction``, ``cocontraction_variation``);
+- **intrinsic** replacement of ``[θ̈, θ̇, θ]`` by a series-compliance response
+  (``cuff_compliance``: the pedal's own inertia stays rigid on the sensor side;
+  ``transmission_compliance``: everything beyond the spring);
+- **output** transforms of every column (``channel_delay``, ``force_sensor_bandwidth``).
+
+``payload_mass`` changes nothing the nominal calibration does not already absorb (the joint's
+inertia is calibrated): it is listed but cannot be identified from these trials.
+
+Fitting is variable projection: the linear parameters (one set per trial) are solved by least
+squares for given nonlinear ones (delays, cut-offs, compliance ratios); the nonlinear ones start
+from a grid and are refined by ``scipy.optimize.least_squares`` on the concentrated residual.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import optimize, signal
+
+from armlab.diagnosis.joint_data import PreparedTrial
+
+__all__ = [
+    "JOINT_SURROGATES",
+    "FittedModel",
+    "NLParam",
+    "Surrogate",
+    "fit_model",
+]
+
+
+@dataclass(frozen=True)
+class NLParam:
+    """A nonlinear parameter: name (unit in it), bounds, log scaling, start grid, discrete flag."""
+
+    name: str
+    lower: float
+    upper: float
+    grid: tuple[float, ...]
+    log: bool = False
+    discrete: bool = False
+
+
+@dataclass(frozen=True)
+class Surrogate:
+    """One effect's change to the joint model (see the module docstring)."""
+
+    name: str
+    kind: str  # "additive" | "intrinsic" | "output" | "absorbed"
+    params: tuple[NLParam, ...] = ()
+    linear: tuple[str, ...] = ()  # names of the linear parameters it adds (per trial)
+
+
+def _lp2(z: np.ndarray, fc: float, zeta: float, fs: float) -> np.ndarray:
+    w = 2 * np.pi * fc
+    b, a = signal.bilinear([w * w], [1.0, 2 * zeta * w, w * w], fs)
+    return signal.lfilter(b, a, z, axis=0)
+
+
+def _shift(t: np.ndarray, z: np.ndarray, delay: float) -> np.ndarray:
+    """z(t - delay), zero before the start (columns along axis 0)."""
+    if z.ndim == 1:
+        return np.interp(t - delay, t, z, left=0.0, right=z[-1])
+    return np.stack([_shift(t, z[:, k], delay) for k in range(z.shape[1])], axis=1)
+
+
+def _compliance(tr: PreparedTrial, tau2: float, tau1: float, ratio: float) -> np.ndarray:
+    """Torque of a joint Z' = tau2·s² + tau1·s + 1 behind a spring of ``ratio`` (per unit K)."""
+    num = [ratio * tau2, ratio * tau1, ratio]
+    den = [tau2, tau1, 1.0 + ratio]
+    b, a = signal.bilinear(num, den, tr.fs_hz)
+    return signal.lfilter(b, a, tr.x - tr.x[0]) + ratio / (1.0 + ratio) * tr.x[0]
+
+
+def _columns(tr: PreparedTrial, model: tuple[Surrogate, ...], theta: dict[str, float]) -> np.ndarray:
+    """(n, k) regressor of one trial for the composed model."""
+    names = [s.name for s in model]
+    cols: list[np.ndarray]
+    if "cuff_compliance" in names or "transmission_compliance" in names:
+        key = "cuff_compliance" if "cuff_compliance" in names else "transmission_compliance"
+        h = _compliance(tr, theta[f"{key}.tau2_s2"], theta[f"{key}.tau1_s"], theta[f"{key}.ratio"])
+        cols = [h, tr.a] if key == "cuff_compliance" else [h]
+    else:
+        cols = [tr.a, tr.v, tr.x]
+    if "reflex" in names:
+        d = theta["reflex.delay_s"]
+        s = theta["reflex.direction"]
+        stretch = np.maximum(s * _shift(tr.t_s, tr.v, d), 0.0)
+        cols.append(s * _lp2(stretch, theta["reflex.cutoff_hz"], 0.7, tr.fs_hz))
+    if "joint_friction" in names:
+        cols.append(np.tanh(tr.v / theta["joint_friction.velocity_rad_s"]))
+    if "cocontraction_variation" in names:
+        cols += [tr.m * tr.x, tr.m * tr.v]
+    phi = np.stack(cols, axis=1)
+    if "channel_delay" in names:
+        phi = _shift(tr.t_s, phi, theta["channel_delay.delay_s"])
+    if "force_sensor_bandwidth" in names:
+        b, a = signal.butter(2, theta["force_sensor_bandwidth.cutoff_hz"], fs=tr.fs_hz)
+        phi = signal.lfilter(b, a, phi - phi[0], axis=0) + phi[0]
+    return phi
+
+
+def _ratio_grid() -> tuple[float, ...]:
+    return (1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0)
+
+
+_COMPLIANCE_PARAMS = (
+    NLParam("tau2_s2", 1e-6, 1e-2, (), log=True),  # I/K, s²: from the nominal fit
+    NLParam("tau1_s", 1e-4, 0.2, (), log=True),  # B/K, s: from the nominal fit
+    NLParam("ratio", 0.2, 500.0, _ratio_grid(), log=True),  # interface or cable stiffness / K
+)
+
+#: The joint_1dof candidates, by catalogue name.
+JOINT_SURROGATES: dict[str, Surrogate] = {
+    s.name: s
+    for s in (
+        Surrogate(
+            "reflex",
+            "additive",
+            (
+                NLParam("delay_s", 0.005, 0.15, tuple(np.round(np.arange(0.01, 0.121, 0.005), 3))),
+                NLParam("cutoff_hz", 0.5, 25.0, (1.5, 3.0, 6.0, 12.0), log=True),
+                NLParam("direction", -1.0, 1.0, (1.0, -1.0), discrete=True),
+            ),
+            ("gain",),
+        ),
+        Surrogate("cuff_compliance", "intrinsic", _COMPLIANCE_PARAMS, ("pedal_inertia",)),
+        Surrogate("transmission_compliance", "intrinsic", _COMPLIANCE_PARAMS),
+        Surrogate(
+            "joint_friction",
+            "additive",
+            (NLParam("velocity_rad_s", 1e-3, 0.5, (0.003, 0.01, 0.03, 0.1), log=True),),
+            ("coulomb",),
+        ),
+        Surrogate(
+            "force_sensor_bandwidth",
+            "output",
+            (NLParam("cutoff_hz", 2.0, 110.0, (5.0, 10.0, 20.0, 40.0, 80.0), log=True),),
+        ),
+        Surrogate(
+            "channel_delay",
+            "output",
+            (NLParam("delay_s", -0.03, 0.06, tuple(np.round(np.arange(-0.02, 0.0405, 0.002), 3))),),
+        ),
+        Surrogate("cocontraction_variation", "additive", (), ("stiffness_slope", "damping_slope")),
+        Surrogate("payload_mass", "absorbed"),
+    )
+}
+
+
+@dataclass(frozen=True, eq=False)
+class FittedModel:
+    """A composed model fitted on the training parts.
+
+    Attributes:
+        effects: the effect names, in the order they were added.
+        theta: nonlinear parameters, ``"<effect>.<param>"`` -> value.
+        beta: per trial, the linear parameters (first the intrinsic ones, then each effect's).
+        linear_names: names of the entries of each ``beta``.
+        predictions: per trial, (n,) N·m model torque in the scoring band.
+        residuals: per trial, (n,) N·m measured minus model torque in the scoring band.
+        n_params: free parameters in all (linear per trial plus shared nonlinear).
+        train_rss: N·m², residual sum of squares over the training parts.
+    """
+
+    effects: tuple[str, ...]
+    theta: dict[str, float]
+    beta: tuple[np.ndarray, ...]
+    linear_names: tuple[str, ...]
+    predictions: tuple[np.ndarray, ...]
+    residuals: tuple[np.ndarray, ...]
+    n_params: int
+    train_rss: float
+    extra: dict = field(default_factory=dict)
+
+
+def _linear_names(model: tuple[Surrogate, ...]) -> tuple[str, ...]:
+    names = [s.name for s in model]
+    if "cuff_compliance" in names:
+        base = ["compliance.gain", "cuff_compliance.pedal_inertia"]
+    elif "transmission_compliance" in names:
+        base = ["compliance.gain"]
+    else:
+        base = ["I", "B", "K"]
+    for s in model:
+        if s.kind == "additive":
+            base += [f"{s.name}.{n}" for n in s.linear]
+    return tuple(base)
+
+
+class _Problem:
+    """Concentrated (variable-projection) residual of a composed model over the training parts."""
+
+    def __init__(self, trials, y_band, model, hp):
+        self.trials, self.y_band, self.model, self.hp = trials, y_band, model, hp
+
+    def design(self, theta):
+        return [signal.sosfiltfilt(self.hp, _columns(tr, self.model, theta), axis=0) for tr in self.trials]
+
+    def solve(self, theta):
+        phis = self.design(theta)
+        betas, res = [], []
+        for tr, y, phi in zip(self.trials, self.y_band, phis, strict=True):
+            beta = np.linalg.lstsq(phi[tr.train], y[tr.train], rcond=None)[0]
+            betas.append(beta)
+            res.append(y - phi @ beta)
+        return phis, betas, res
+
+    def train_residual(self, theta):
+        _, _, res = self.solve(theta)
+        return np.concatenate([r[tr.train] for tr, r in zip(self.trials, res, strict=True)])
+
+
+def _start_compliance(theta, name, base_beta):
+    i, b, k = (np.mean([bb[j] for bb in base_beta]) for j in range(3))
+    if k == 0 or not np.isfinite(k):
+        k = 1.0
+    theta.setdefault(f"{name}.tau2_s2", float(np.clip(abs(i / k), 2e-6, 5e-3)))
+    theta.setdefault(f"{name}.tau1_s", float(np.clip(abs(b / k), 2e-4, 0.1)))
+
+
+def fit_model(
+    trials: tuple[PreparedTrial, ...],
+    y_band: list[np.ndarray],
+    model: tuple[Surrogate, ...],
+    hp: np.ndarray,
+    *,
+    theta0: dict[str, float] | None = None,
+    nominal_beta: tuple[np.ndarray, ...] | None = None,
+) -> FittedModel:
+    """Fit a composed model: grid over the parameters not in ``theta0``, then a joint refinement.
+
+    Args:
+        trials: prepared trials.
+        y_band: per trial, (n,) measured torque in the scoring band.
+        model: the surrogates, the newest last.
+        hp: second-order sections of the scoring high-pass.
+        theta0: nonlinear parameters already fitted (kept as the start of the refinement).
+        nominal_beta: the nominal fit's linear parameters (start of compliance time constants).
+    """
+    theta = dict(theta0 or {})
+    for s in model:
+        if s.kind == "intrinsic" and nominal_beta is not None:
+            _start_compliance(theta, s.name, nominal_beta)
+    prob = _Problem(trials, y_band, model, hp)
+    todo = [(f"{s.name}.{p.name}", p) for s in model for p in s.params if f"{s.name}.{p.name}" not in theta]
+    gridded = [(k, p) for k, p in todo if p.grid]
+    for k, p in todo:
+        if not p.grid:
+            theta[k] = float(np.sqrt(p.lower * p.upper)) if p.log else 0.5 * (p.lower + p.upper)
+    if gridded:
+        keys = [k for k, _ in gridded]
+        mesh = np.array(np.meshgrid(*[p.grid for _, p in gridded], indexing="ij")).reshape(len(keys), -1).T
+        best = (np.inf, None)
+        for row in mesh:
+            trial_theta = {**theta, **dict(zip(keys, map(float, row), strict=True))}
+            cost = float(np.sum(prob.train_residual(trial_theta) ** 2))
+            if cost < best[0]:
+                best = (cost, trial_theta)
+        theta = best[1]
+    all_params = {f"{s.name}.{p.name}": p for s in model for p in s.params}
+    free = [k for k, p in all_params.items() if not p.discrete]
+    if free:
+        theta = _refine(prob, theta, free, all_params)
+    phis, betas, res = prob.solve(theta)
+    n_lin = phis[0].shape[1]
+    return FittedModel(
+        effects=tuple(s.name for s in model),
+        theta=theta,
+        beta=tuple(betas),
+        linear_names=_linear_names(model),
+        predictions=tuple(y - r for y, r in zip(y_band, res, strict=True)),
+        residuals=tuple(res),
+        n_params=n_lin * len(trials) + len(free),
+        train_rss=float(np.sum(prob.train_residual(theta) ** 2)),
+    )
+
+
+def _refine(prob: _Problem, theta: dict, free: list[str], params: dict[str, NLParam]) -> dict:
+    """Bounded least squares over the free nonlinear parameters (log coordinates where marked)."""
+
+    def to_u(k, v):
+        return np.log(v) if params[k].log else v
+
+    def from_u(k, u):
+        return float(np.exp(u)) if params[k].log else float(u)
+
+    lo = np.array([to_u(k, params[k].lower) for k in free])
+    hi = np.array([to_u(k, params[k].upper) for k in free])
+    u0 = np.clip(np.array([to_u(k, theta[k]) for k in free]), lo + 1e-9, hi - 1e-9)
+
+    def resid(u):
+        return prob.train_residual({**theta, **{k: from_u(k, x) for k, x in zip(free, u, strict=True)}})
+
+    sol = optimize.least_squares(resid, u0, bounds=(lo, hi), x_scale="jac", diff_step=1e-3, max_nfev=60)
+    cand = {**theta, **{k: from_u(k, x) for k, x in zip(free, sol.x, strict=True)}}
+    return cand if np.sum(sol.fun**2) <= np.sum(resid(u0) ** 2) else theta

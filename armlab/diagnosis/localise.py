@@ -1,0 +1,161 @@
+"""Where the gap lies: held-out residual broken down by band, time after onset, trial; residual tests.
+
+All figures compare the held-out residual (measured minus model torque in the scoring band) with
+the noise floor, as a fraction of the measured power in the same slice (so 0.05 = 5 % of the
+measured variance there is unexplained; ``floor`` is what noise alone would leave).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from scipy import signal
+
+__all__ = [
+    "BANDS_HZ",
+    "WINDOWS_MS",
+    "band_breakdown",
+    "frf_parameters",
+    "onsets",
+    "residual_tests",
+    "window_breakdown",
+]
+
+#: Hz, frequency bands of the breakdown (issue 5).
+BANDS_HZ = ((0.0, 2.0), (2.0, 8.0), (8.0, 20.0), (20.0, 40.0))
+#: ms, windows after perturbation onset (issue 5).
+WINDOWS_MS = ((0, 20), (20, 60), (60, 120), (120, 250), (250, 400))
+
+
+def _held(trials, arrays):
+    return [z[~tr.train] for z, tr in zip(arrays, trials, strict=True)]
+
+
+def band_breakdown(trials, y_band, residuals, noise) -> list[dict]:
+    """Residual, measured and noise power per band (held-out parts, Welch PSDs)."""
+    fs = trials[0].fs_hz
+    held_y, held_r = _held(trials, y_band), _held(trials, residuals)
+    nper = min(512, min(z.size for z in held_y))
+    f, py = signal.welch(np.concatenate(held_y), fs=fs, nperseg=nper)
+    _, pr = signal.welch(np.concatenate(held_r), fs=fs, nperseg=nper)
+    pn = np.interp(f, noise.f_hz, noise.psd)
+    out = []
+    for lo, hi in BANDS_HZ:
+        sel = (f >= lo) & (f < hi)
+        meas = float(np.trapezoid(py[sel], f[sel])) if sel.sum() > 1 else float(np.sum(py[sel]))
+        res = float(np.trapezoid(pr[sel], f[sel])) if sel.sum() > 1 else float(np.sum(pr[sel]))
+        nse = float(np.trapezoid(pn[sel], f[sel])) if sel.sum() > 1 else float(np.sum(pn[sel]))
+        out.append(
+            {
+                "band_hz": [lo, hi],
+                "gap": res / meas if meas > 0 else float("nan"),
+                "floor": nse / meas if meas > 0 else float("nan"),
+                "residual_power": res,
+                "measured_power": meas,
+            }
+        )
+    return out
+
+
+def onsets(trial, *, level: float = 0.5, refractory_s: float = 0.05) -> np.ndarray:
+    """Sample indices where the joint speed rises through ``level`` × its 99th percentile."""
+    speed = np.abs(trial.v)
+    thr = level * np.percentile(speed, 99)
+    up = np.flatnonzero((speed[1:] >= thr) & (speed[:-1] < thr)) + 1
+    keep, last = [], -np.inf
+    gap = refractory_s * trial.fs_hz
+    for i in up:
+        if i - last >= gap:
+            keep.append(i)
+            last = i
+    return np.asarray(keep, dtype=int)
+
+
+def window_breakdown(trials, y_band, residuals, noise_var: float) -> list[dict]:
+    """Residual and measured mean square by time since the last perturbation onset (held out)."""
+    since_all, r_all, y_all = [], [], []
+    for tr, y, r in zip(trials, y_band, residuals, strict=True):
+        on = onsets(tr)
+        idx = np.arange(tr.t_s.size)
+        pos = np.searchsorted(on, idx, side="right") - 1
+        since = np.where(pos >= 0, (idx - on[np.clip(pos, 0, None)]) / tr.fs_hz * 1e3, np.inf)
+        held = ~tr.train
+        since_all.append(since[held])
+        r_all.append(r[held])
+        y_all.append(y[held])
+    since, r, y = (np.concatenate(z) for z in (since_all, r_all, y_all))
+    out = []
+    for lo, hi in WINDOWS_MS:
+        sel = (since >= lo) & (since < hi)
+        if not sel.any():
+            out.append({"window_ms": [lo, hi], "gap": None, "floor": None, "samples": 0})
+            continue
+        ms_y = float(np.mean(y[sel] ** 2))
+        out.append(
+            {
+                "window_ms": [lo, hi],
+                "gap": float(np.mean(r[sel] ** 2)) / ms_y,
+                "floor": noise_var / ms_y,
+                "samples": int(sel.sum()),
+            }
+        )
+    return out
+
+
+def residual_tests(trials, residuals, *, max_lag_s: float = 0.25, min_lag_s: float = -0.05) -> dict:
+    """Residual whiteness and residual–input (joint velocity) cross-correlation against lag.
+
+    Returns a dict with ``lags_s``, ``autocorrelation`` (lags >= 0), ``cross_correlation``
+    (residual at t vs velocity at t - lag), the 95 % bound ``±1.96/sqrt(n)`` for a white residual,
+    the fraction of autocorrelation lags (> 0) outside the bound, and the lag and value of the
+    largest cross-correlation.
+    """
+    fs = trials[0].fs_hz
+    lags = np.arange(int(round(min_lag_s * fs)), int(round(max_lag_s * fs)) + 1)
+    acf = np.zeros(lags.size)
+    ccf = np.zeros(lags.size)
+    n_total = 0
+    for tr, r in zip(trials, residuals, strict=True):
+        held = ~tr.train
+        e = r[held] - r[held].mean()
+        u = tr.v[held] - tr.v[held].mean()
+        n = e.size
+        n_total += n
+        se, su = np.sqrt(np.sum(e * e)), np.sqrt(np.sum(u * u))
+        for i, k in enumerate(lags):
+            if k >= 0:
+                acf[i] += np.sum(e[k:] * e[: n - k]) / se**2 * n
+                ccf[i] += np.sum(e[k:] * u[: n - k]) / (se * su) * n
+            else:
+                ccf[i] += np.sum(e[: n + k] * u[-k:]) / (se * su) * n
+    acf /= n_total
+    ccf /= n_total
+    bound = 1.96 / np.sqrt(n_total)
+    pos = lags > 0
+    j = int(np.argmax(np.abs(ccf)))
+    return {
+        "lags_s": (lags / fs).tolist(),
+        "autocorrelation": np.where(lags >= 0, acf, np.nan).tolist(),
+        "cross_correlation": ccf.tolist(),
+        "bound": bound,
+        "whiteness_fraction_outside": float(np.mean(np.abs(acf[pos]) > bound)),
+        "peak_cross_lag_s": float(lags[j] / fs),
+        "peak_cross_value": float(ccf[j]),
+    }
+
+
+def frf_parameters(trial, torque: np.ndarray, *, band_hz=(1.0, 20.0), nperseg: int = 1024) -> dict:
+    """I, B, K from the position→torque frequency response in a band (the protocol's own FRF fit).
+
+    ``Z(f) = -S_xy / S_xx`` (torque resists the motion) and ``Re Z = K - I·ω²``, ``Im Z = B·ω``
+    by least squares over the band. Run on measured and on simulated torque, the difference is
+    the bias a model error leaves in the identified parameters.
+    """
+    fs = trial.fs_hz
+    f, sxy = signal.csd(trial.x, torque, fs=fs, nperseg=min(nperseg, trial.x.size))
+    _, sxx = signal.welch(trial.x, fs=fs, nperseg=min(nperseg, trial.x.size))
+    sel = (f >= band_hz[0]) & (f <= band_hz[1])
+    z = -sxy[sel] / sxx[sel]
+    w = 2 * np.pi * f[sel]
+    kb = np.linalg.lstsq(np.c_[np.ones_like(w), -(w**2)], z.real, rcond=None)[0]
+    b = float(np.sum(z.imag * w) / np.sum(w * w))
+    return {"I": float(kb[1]), "B": b, "K": float(kb[0])}

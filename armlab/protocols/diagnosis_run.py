@@ -1,0 +1,137 @@
+"""The edge of ``armlab diagnose`` and ``armlab diagnose-benchmark``: files in, files out.
+
+``run_diagnosis`` reads measured trials, runs :func:`armlab.diagnosis.diagnose.diagnose_joint` and
+writes ``results.json``, ``report.md``, the figures and ``diagnosis.rrd`` into a new folder.
+``run_benchmark`` makes the referee's pseudo-real datasets, diagnoses each from its files alone
+(in parallel through joblib, the launcher Hydra's joblib plugin also uses) and writes the scores.
+Nothing already written is overwritten: an existing non-empty output folder is an error.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from datetime import datetime
+from pathlib import Path
+
+import numpy as np
+
+from armlab.config.diagnosis import DIAGNOSIS_PROTOCOLS, DiagnosisConfig, RefereeConfig
+from armlab.config.store import apply_overrides
+from armlab.errors import ConfigError, DataError
+from armlab.protocols._files import json_default, write_json, write_new
+
+__all__ = [
+    "default_diagnosis_dir",
+    "run_benchmark",
+    "run_diagnosis",
+    "run_diagnoser",
+]
+
+_ROOT = Path(__file__).resolve().parents[2]
+
+
+def default_diagnosis_dir(kind: str = "diagnose") -> Path:
+    """``outputs/<kind>/<timestamp with microseconds>`` under the repository root."""
+    return _ROOT / "outputs" / kind / datetime.now().strftime("%Y-%m-%d_%H-%M-%S-%f")
+
+
+def _new_dir(out: Path) -> Path:
+    out = Path(out)
+    if out.exists() and any(out.iterdir()):
+        raise DataError(f"{out} exists and is not empty; armlab never overwrites results — choose a new out=")
+    out.mkdir(parents=True, exist_ok=True)
+    return out
+
+
+def _check_protocol(protocol: str) -> None:
+    if protocol not in DIAGNOSIS_PROTOCOLS:
+        raise ConfigError(
+            f"diagnosis of protocol {protocol!r} is not available; choose one of {list(DIAGNOSIS_PROTOCOLS)}"
+        )
+
+
+def run_diagnoser(data: Path, protocol: str, cfg: DiagnosisConfig) -> tuple[dict, dict]:
+    """Diagnose the trial files at ``data`` (no output files): (results, series)."""
+    from armlab.data.joint_import import load_joint_data
+    from armlab.diagnosis.diagnose import diagnose_joint
+
+    _check_protocol(protocol)
+    records = load_joint_data(Path(data), min_duration_s=cfg.min_duration_s)
+    results, series = diagnose_joint(records, cfg)
+    results["data"] = str(data)
+    return results, series
+
+
+def run_diagnosis(
+    data: Path, protocol: str, overrides: list[str] | None, out_dir: Path, *, figures: bool = True
+) -> tuple[Path, dict]:
+    """Diagnose and write ``results.json``, ``report.md``, figures and ``diagnosis.rrd``."""
+    from armlab.diagnosis.report import format_report
+
+    _check_protocol(protocol)
+    cfg = apply_overrides(DiagnosisConfig(), "diagnosis", overrides)
+    if not Path(data).exists():
+        raise DataError(f"data {str(data)!r} does not exist; give a trial file or a folder of them")
+    t0 = time.perf_counter()
+    results, series = run_diagnoser(Path(data), protocol, cfg)
+    results["timing_s"] = {"diagnosis": time.perf_counter() - t0}
+    out = _new_dir(out_dir)
+    names: list[str] = []
+    if figures:
+        from armlab.viz.diagnosis import diagnosis_figures, diagnosis_recording
+
+        names = [p.name for p in diagnosis_figures(series, results, out)]
+        diagnosis_recording(series, out / "diagnosis.rrd")
+    write_json(out / "results.json", results)
+    write_new(out / "report.md", format_report(results, data_path=str(data), figures=names))
+    return out, results
+
+
+def _one_case(cls: str, rep: int, ref: RefereeConfig, diag_cfg: DiagnosisConfig, root: Path) -> dict:
+    from armlab.diagnosis.referee import JOINT_CLASSES, make_dataset, score_case
+
+    folder = root / "datasets" / f"{cls.replace(':', '-').replace('+', '-')}_{rep:02d}"
+    ds = make_dataset(cls, rep, ref, diag_cfg, folder / "trials")
+    (folder / "truth.json").write_text(json.dumps(ds.truth, indent=2, default=json_default))
+    excluded = list(JOINT_CLASSES[cls][1])
+    cfg = apply_overrides(diag_cfg, "diagnosis", [f"diagnosis.exclude=[{','.join(excluded)}]"])
+    t0 = time.perf_counter()
+    results, _ = run_diagnoser(folder / "trials", ref.protocol, cfg)
+    seconds = time.perf_counter() - t0
+    (folder / "results.json").write_text(json.dumps(results, indent=2, default=json_default))
+    score = score_case(cls, results)
+    return {**score, "replicate": rep, "enr": ds.enr, "seconds": seconds, "truth": ds.truth}
+
+
+def run_benchmark(overrides: list[str] | None, out_dir: Path) -> tuple[Path, dict]:
+    """Run the referee: make, diagnose and score every (class, replicate); write the summary."""
+    from joblib import Parallel, delayed
+
+    from armlab.diagnosis.benchmark_summary import format_benchmark, summarise
+    from armlab.diagnosis.referee import JOINT_CLASSES
+
+    ref_items = [o for o in overrides or [] if o.startswith("referee.")]
+    diag_items = [o for o in overrides or [] if o.startswith("diagnosis.")]
+    bad = [o for o in overrides or [] if o not in ref_items + diag_items]
+    if bad:
+        raise ConfigError(
+            f"arguments {bad} must look like referee.<field>=<value> or diagnosis.<field>=<value>"
+        )
+    ref = apply_overrides(RefereeConfig(), "referee", ref_items)
+    diag_cfg = apply_overrides(DiagnosisConfig(), "diagnosis", diag_items)
+    classes = list(ref.classes) if ref.classes is not None else list(JOINT_CLASSES)
+    unknown = [c for c in classes if c not in JOINT_CLASSES]
+    if unknown:
+        raise ConfigError(f"unknown referee classes {unknown}; valid: {list(JOINT_CLASSES)}")
+    out = _new_dir(out_dir)
+    t0 = time.perf_counter()
+    cases = Parallel(n_jobs=ref.jobs)(
+        delayed(_one_case)(c, r, ref, diag_cfg, out) for c in classes for r in range(ref.replicates)
+    )
+    summary = summarise(cases)
+    summary["timing_s"] = time.perf_counter() - t0
+    summary["median_diagnosis_s"] = float(np.median([c["seconds"] for c in cases]))
+    write_json(out / "benchmark.json", {"summary": summary, "cases": cases})
+    write_new(out / "benchmark.md", format_benchmark(summary, ref))
+    return out, summary
