@@ -6,6 +6,14 @@ from armlab.data.h5io import (
     read_trials,
     write_trials,
 )
+from armlab.data.joint_import import (
+    JOINT_COLUMNS,
+    SUPPORTED_SUFFIXES,
+    TIME_VARYING_COLUMNS,
+    JointRecord,
+    load_joint_data,
+    write_joint_csv,
+)
 from armlab.data.reklab import (
     DEFAULT_REKLAB_ROOT,
     AnkleTrial,
@@ -24,4 +32,10 @@ __all__ = [
     "AnkleTrial",
     "list_ankle_trials",
     "load_ankle_trial",
+    "JOINT_COLUMNS",
+    "TIME_VARYING_COLUMNS",
+    "SUPPORTED_SUFFIXES",
+    "JointRecord",
+    "load_joint_data",
+    "write_joint_csv",
 ]

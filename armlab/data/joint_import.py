@@ -1,0 +1,590 @@
+"""Importer for 1-DoF joint-perturbation recordings: imposed joint angle in, measured torque out.
+
+One :class:`JointRecord` per trial, read by :func:`load_joint_data` from a CSV file, a MATLAB
+``.mat`` file, or a folder of them; :func:`write_joint_csv` writes the CSV form. The accepted
+layouts, units, sign conventions and every error are documented in ``docs/data_import.md``:
+
+* CSV, comma-separated, one header row naming at least ``t_s,position_rad,torque_Nm`` (any order,
+  extra columns ignored), or the time-varying REKLAB layout ``t_s,position_perturbation_rad,
+  torque_perturbation_Nm,ankle_position_rad`` (position and torque are then the perturbation
+  columns, ``ankle_position_rad`` the slow operating point).
+* ``.mat`` (v5/v7 or v7.3, read with ``matio`` from the PyPI package mat-io): REKLAB ``nldat``
+  objects whose channels are identified as position or torque by their names and units; or plain
+  variables / a struct / a table holding ``t_s`` (or a scalar ``fs_hz``), ``position_rad`` (or
+  ``position``) and ``torque_Nm`` (or ``torque``).
+
+Every trial is checked: finite values, time strictly increasing with a constant step (relative
+tolerance 1e-6 of the step plus 1e-9 s), at least two samples. Signs are as recorded.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from armlab.errors import DataError
+
+__all__ = [
+    "JOINT_COLUMNS",
+    "TIME_VARYING_COLUMNS",
+    "SUPPORTED_SUFFIXES",
+    "JointRecord",
+    "load_joint_data",
+    "write_joint_csv",
+]
+
+#: CSV header of a stationary trial: time (s), imposed joint angle (rad), measured torque (N·m).
+JOINT_COLUMNS: tuple[str, ...] = ("t_s", "position_rad", "torque_Nm")
+#: CSV header of a time-varying trial (REKLAB ``tv_pilot``): perturbation about a moving angle.
+TIME_VARYING_COLUMNS: tuple[str, ...] = (
+    "t_s",
+    "position_perturbation_rad",
+    "torque_perturbation_Nm",
+    "ankle_position_rad",
+)
+#: File suffixes :func:`load_joint_data` reads (case-insensitive).
+SUPPORTED_SUFFIXES: tuple[str, ...] = (".csv", ".mat")
+
+# A sampling interval may deviate from the median interval by _UNIFORM_RTOL * step + _UNIFORM_ATOL_S:
+# files that print time with 1 ms resolution leave ~1e-12 s of parsing error; 1e-6 is a gap.
+_UNIFORM_RTOL = 1e-6
+_UNIFORM_ATOL_S = 1e-9
+# Sample rates of the files of one folder must agree to this relative tolerance.
+_RATE_RTOL = 1e-6
+# Time needs more digits than the signals: at 100 s, 9 significant digits resolve only 1 µs, too
+# coarse for the uniformity check at kHz rates that are not decimal (e.g. 2048 Hz). 15 digits
+# print k/1000 s as written and round-trip any time to ~1e-15 relative.
+_TIME_FMT = "%.15g"
+_SIGNAL_FMT = "%.9g"
+
+# .mat field names, first match wins.
+_POSITION_FIELDS = ("position_rad", "position")
+_TORQUE_FIELDS = ("torque_Nm", "torque")
+# nldat channel names: a token starting a word (so "compose" is no position, "posPert1" is).
+_POSITION_NAME = re.compile(r"(?:^|[^a-z])(?:pos|angle|theta)", re.IGNORECASE)
+_TORQUE_NAME = re.compile(r"(?:^|[^a-z])(?:tq|trq|torque)", re.IGNORECASE)
+_UNSET_UNITS = frozenset({"", "default units", "none", "unknown"})
+_POSITION_UNITS = frozenset({"rad", "radian", "radians"})
+_TORQUE_UNITS = frozenset({"nm", "n·m", "n.m", "n*m", "n-m", "newtonmeter", "newtonmeters"})
+_MAT_LAYOUTS = (
+    "nldat objects with one position channel (name starting pos/angle/theta, units rad or unset) "
+    "and one torque channel (name starting tq/trq/torque, units N·m or unset); or variables, a "
+    "struct or a table with t_s (or scalar fs_hz), position_rad (or position), torque_Nm (or torque)"
+)
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class JointRecord:
+    """One 1-DoF joint-perturbation trial: position imposed by the actuator, torque measured.
+
+    Attributes:
+        name: the file stem, or ``"<stem>/<variable>"`` for a ``.mat`` holding several trials.
+        t_s: (n,) s, sample times as recorded (starting at the first sample's time).
+        position: (n,) rad, joint angle imposed by the actuator (the input); for a time-varying
+            trial the perturbation about :attr:`operating_point`.
+        torque: (n,) N·m, measured joint torque (the output), sign as recorded.
+        fs_hz: Hz, sample rate, ``(n - 1) / (t_s[-1] - t_s[0])`` (``1 / domainIncr`` for nldat).
+        path: the file read.
+        operating_point: (n,) rad, slow joint angle about which a time-varying trial is perturbed
+            (``ankle_position_rad``, the nldat scheduling variable); None for stationary trials.
+    """
+
+    name: str
+    t_s: np.ndarray
+    position: np.ndarray
+    torque: np.ndarray
+    fs_hz: float
+    path: Path
+    operating_point: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        arrays = {"t_s": self.t_s, "position": self.position, "torque": self.torque}
+        if self.operating_point is not None:
+            arrays["operating_point"] = self.operating_point
+        shapes = {k: np.shape(v) for k, v in arrays.items()}
+        if len(set(shapes.values())) != 1 or len(shapes["t_s"]) != 1:
+            raise DataError(f"JointRecord {self.name!r}: arrays must be 1-D of one length, got {shapes}")
+        if not (math.isfinite(self.fs_hz) and self.fs_hz > 0):
+            raise DataError(
+                f"JointRecord {self.name!r}: fs_hz must be a finite rate > 0 Hz, got {self.fs_hz}"
+            )
+
+    @property
+    def n_samples(self) -> int:
+        """Number of samples n."""
+        return int(self.t_s.size)
+
+    @property
+    def duration_s(self) -> float:
+        """s, ``n_samples / fs_hz``."""
+        return self.n_samples / self.fs_hz
+
+
+# --- checks shared by every source ----------------------------------------------------------------
+def _check_samples(where: str, t: np.ndarray, signals: dict[str, np.ndarray], unit: str = "row") -> float:
+    """Validate one trial and return its sample rate in Hz.
+
+    Args:
+        where: prefix of every message (the file, and the variable for ``.mat``).
+        t: (n,) s, sample times.
+        signals: name -> (n,) values, checked finite with ``t``.
+        unit: what a sample is called in messages (``"row"``: data rows of a CSV, counted from 1
+            below the header; ``"sample"``: samples of a ``.mat`` variable, counted from 1).
+    """
+    n = t.size
+    if n == 0:
+        raise DataError(f"{where}: has no data {unit}s; a trial needs at least 2 (time must define a rate)")
+    if n == 1:
+        raise DataError(f"{where}: has 1 data {unit}; a trial needs at least 2 to define a sample rate")
+    columns = {"t_s": t, **signals}
+    stacked = np.column_stack(list(columns.values()))
+    bad = ~np.isfinite(stacked)
+    if bad.any():
+        row, col = np.argwhere(bad)[0]
+        raise DataError(
+            f"{where}: {int(bad.sum())} NaN or inf value(s); the first in column "
+            f"{list(columns)[col]!r} at {unit} {row + 1} (values must be finite numbers)"
+        )
+    dt = np.diff(t)
+    if np.any(dt <= 0):
+        i = int(np.flatnonzero(dt <= 0)[0])
+        raise DataError(
+            f"{where}: time is not strictly increasing at {unit} {i + 2}: t_s = {t[i + 1]:.9g} s after "
+            f"{t[i]:.9g} s at {unit} {i + 1} (each time must exceed the one before)"
+        )
+    step = float(np.median(dt))
+    tol = _UNIFORM_RTOL * step + _UNIFORM_ATOL_S
+    off = np.abs(dt - step) > tol
+    if off.any():
+        i = int(np.flatnonzero(off)[0])
+        raise DataError(
+            f"{where}: non-uniform sampling: the interval {dt[i]:.9g} s between {unit}s {i + 1} and "
+            f"{i + 2} differs from the median interval {step:.9g} s by more than {tol:.3g} s (time must "
+            f"increase by a constant step; tolerance {_UNIFORM_RTOL:g} x step + {_UNIFORM_ATOL_S:g} s)"
+        )
+    return (n - 1) / float(t[-1] - t[0])
+
+
+# --- CSV ------------------------------------------------------------------------------------------
+def _csv_layout(path: Path, header: list[str]) -> tuple[str, ...]:
+    """The layout the header claims; DataError on missing or duplicated columns."""
+    dup = sorted({h for h in header if header.count(h) > 1})
+    if dup:
+        raise DataError(
+            f"{path.name}: duplicate column(s) {dup} in the header {header}; names must be unique"
+        )
+    time_varying = any(c in header for c in TIME_VARYING_COLUMNS[1:])
+    expected, other = (
+        (TIME_VARYING_COLUMNS, JOINT_COLUMNS) if time_varying else (JOINT_COLUMNS, TIME_VARYING_COLUMNS)
+    )
+    missing = [c for c in expected if c not in header]
+    if missing:
+        raise DataError(
+            f"{path.name}: missing column(s) {missing}; expected {list(expected)} (the other layout: "
+            f"{list(other)}; extra columns are ignored), found {header}"
+        )
+    return expected
+
+
+def _first_bad_cell(path: Path, header: list[str], usecols: list[int]) -> str | None:
+    """Where np.loadtxt failed, in words (a short row or a non-numeric cell); slow path only."""
+    row = 0
+    with path.open(encoding="utf-8-sig") as fh:
+        next(fh)
+        for line in fh:
+            if not line.strip():
+                continue  # np.loadtxt skips blank lines too
+            row += 1
+            cells = line.rstrip("\r\n").split(",")
+            if len(cells) <= max(usecols):
+                return f"data row {row} has {len(cells)} cell(s), the header has {len(header)} columns"
+            for j in usecols:
+                try:
+                    float(cells[j])
+                except ValueError:
+                    return (
+                        f"non-numeric cell {cells[j].strip()!r} at data row {row}, column {header[j]!r}; "
+                        f"cells must be decimal numbers (nan/inf are refused later)"
+                    )
+    return None
+
+
+def _read_csv(path: Path) -> JointRecord:
+    with path.open(encoding="utf-8-sig") as fh:
+        first = fh.readline()
+        if not first.strip():
+            raise DataError(
+                f"{path.name}: is empty; expected a header row with columns {list(JOINT_COLUMNS)} "
+                f"(or {list(TIME_VARYING_COLUMNS)}) and data rows below it"
+            )
+        has_rows = any(line.strip() for line in fh)
+    header = [h.strip() for h in first.split(",")]
+    layout = _csv_layout(path, header)
+    if not has_rows:
+        raise DataError(f"{path.name}: has no data rows below the header; a trial needs at least 2")
+    usecols = [header.index(c) for c in layout]
+    try:
+        data = np.loadtxt(path, delimiter=",", skiprows=1, usecols=usecols, ndmin=2, encoding="utf-8-sig")
+    except ValueError as err:
+        where = _first_bad_cell(path, header, usecols) or f"could not parse the numbers ({err})"
+        raise DataError(f"{path.name}: {where}") from None
+    col = dict(zip(layout, data.T, strict=True))
+    t = np.ascontiguousarray(col["t_s"])
+    signals = {c: np.ascontiguousarray(col[c]) for c in layout[1:]}
+    fs = _check_samples(path.name, t, signals, "row")
+    return JointRecord(
+        name=path.stem,
+        t_s=t,
+        position=signals[layout[1]],
+        torque=signals[layout[2]],
+        fs_hz=fs,
+        path=path,
+        operating_point=signals.get("ankle_position_rad"),
+    )
+
+
+# --- MATLAB ---------------------------------------------------------------------------------------
+def _load_mat_file(path: Path) -> dict[str, Any]:
+    # Imported here: matio imports pandas (~0.5 s) and, on import, sets a pandas option with a
+    # deprecation warning that says nothing about the data.
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message=".*infer_string.*")
+        import matio
+    try:
+        contents = matio.load_from_mat(path)
+    except Exception as err:  # matio raises its own MatReadError, ValueError, KeyError, OSError...
+        raise DataError(
+            f"{path.name}: not a readable MATLAB file ({type(err).__name__}: {err}); expected a .mat "
+            f"file of version 5, 7 or 7.3"
+        ) from None
+    return {k: v for k, v in contents.items() if not k.startswith("__")}
+
+
+def _texts(value: Any) -> list[str]:
+    """A MATLAB char array or cell array of them as a list of str (column-major order)."""
+    if value is None:
+        return []
+    a = np.asarray(value)
+    if a.dtype == object:  # cell array
+        return [" ".join(_texts(v)) for v in a.ravel(order="F")]
+    return [str(v) for v in a.ravel()]  # char array: one str per row
+
+
+def _scalar(value: Any) -> float | None:
+    """A positive finite number from a 1x1 array, or None."""
+    try:
+        a = np.asarray(value, dtype=float).ravel()
+    except (TypeError, ValueError):
+        return None
+    return float(a[0]) if a.size == 1 and math.isfinite(a[0]) and a[0] > 0 else None
+
+
+def _vector(value: Any, where: str, name: str) -> np.ndarray:
+    a = np.asarray(value)
+    if a.dtype.kind not in "fiub" or sum(d > 1 for d in a.shape) > 1:
+        raise DataError(f"{where}: {name!r} must be a real vector (1 x n or n x 1), got {_describe(value)}")
+    return np.ascontiguousarray(a, dtype=float).ravel()
+
+
+def _describe(value: Any) -> str:
+    if getattr(value, "classname", None) == "nldat":
+        return f"nldat, channels {_texts(value.properties.get('chanNames'))}"
+    fields = _fields(value)
+    if fields is not None:
+        return f"struct/table with fields {list(fields)}"
+    if hasattr(value, "classname"):
+        return f"{value.classname} object"
+    return f"{value.dtype} array {value.shape}" if isinstance(value, np.ndarray) else type(value).__name__
+
+
+def _fields(value: Any) -> dict[str, Any] | None:
+    """The named fields of a 1x1 struct or a table (matio reads tables as DataFrames); else None."""
+    if isinstance(value, np.ndarray) and value.dtype.names and value.size == 1:
+        return {n: value.ravel()[0][n] for n in value.dtype.names}
+    if hasattr(value, "columns") and hasattr(value, "to_numpy"):
+        return {str(c): value[c].to_numpy() for c in value.columns}
+    return None
+
+
+def _is_trial_fields(fields: dict[str, Any]) -> bool:
+    return any(k in fields for k in _POSITION_FIELDS) and any(k in fields for k in _TORQUE_FIELDS)
+
+
+def _from_fields(fields: dict[str, Any], where: str) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """(t_s, position, torque, fs_hz) from fields named as in :data:`JOINT_COLUMNS` (or plain)."""
+    pos_key = next(k for k in _POSITION_FIELDS if k in fields)
+    tq_key = next(k for k in _TORQUE_FIELDS if k in fields)
+    position, torque = _vector(fields[pos_key], where, pos_key), _vector(fields[tq_key], where, tq_key)
+    fs_given = _scalar(fields["fs_hz"]) if "fs_hz" in fields else None
+    if "fs_hz" in fields and fs_given is None:
+        raise DataError(f"{where}: 'fs_hz' must be a scalar rate > 0 Hz, got {_describe(fields['fs_hz'])}")
+    if "t_s" in fields:
+        t = _vector(fields["t_s"], where, "t_s")
+    elif fs_given is not None:
+        t = np.arange(position.size) / fs_given
+    else:
+        raise DataError(f"{where}: has {pos_key!r} and {tq_key!r} but no time; add 't_s' (s) or 'fs_hz' (Hz)")
+    if not t.size == position.size == torque.size:
+        sizes = {"t_s": t.size, pos_key: position.size, tq_key: torque.size}
+        raise DataError(f"{where}: the vectors differ in length {sizes}; they must have one sample each")
+    fs = _check_samples(where, t, {pos_key: position, tq_key: torque}, "sample")
+    if fs_given is not None and abs(fs - fs_given) > _RATE_RTOL * fs_given:
+        raise DataError(f"{where}: 'fs_hz' = {fs_given:.9g} Hz but 't_s' gives {fs:.9g} Hz; they must agree")
+    return t, position, torque, fs if "t_s" in fields else fs_given
+
+
+def _nldat_roles(names: list[str], units: list[str], where: str) -> tuple[list[int], list[int]]:
+    """Indices of the position and the torque channels, from channel names, checked by units."""
+    if len(units) == 1:  # nldat's default: one 'Default Units' for every channel
+        units = units * len(names)
+    if len(units) != len(names):
+        raise DataError(f"{where}: {len(names)} channel name(s) {names} but {len(units)} unit(s) {units}")
+    pos, tq = [], []
+    for i, (name, unit) in enumerate(zip(names, units, strict=True)):
+        u = (
+            ""
+            if unit.strip().lower() in _UNSET_UNITS
+            else unit.strip().strip("()[]").lower().replace(" ", "")
+        )
+        named_pos, named_tq = bool(_POSITION_NAME.search(name)), bool(_TORQUE_NAME.search(name))
+        if named_pos and named_tq:
+            raise DataError(f"{where}: channel {name!r} names both a position and a torque; rename it")
+        if named_pos or (not named_tq and u in _POSITION_UNITS):
+            if u and u not in _POSITION_UNITS:
+                raise DataError(
+                    f"{where}: position channel {name!r} has units {unit!r}; accepted: rad or unset"
+                )
+            pos.append(i)
+        elif named_tq or u in _TORQUE_UNITS:
+            if u and u not in _TORQUE_UNITS:
+                raise DataError(
+                    f"{where}: torque channel {name!r} has units {unit!r}; accepted: N·m or unset"
+                )
+            tq.append(i)
+    return pos, tq
+
+
+def _from_nldat(value: Any, where: str) -> tuple[np.ndarray, np.ndarray, list[str], float | None]:
+    """(t_s, (samples, channels) data, channel names, fs_hz or None) of a REKLAB nldat object."""
+    p = value.properties
+    names = _texts(p.get("chanNames"))
+    data = np.asarray(p.get("dataSet"))
+    if data.ndim == 3 and data.shape[2] == 1:  # one realisation
+        data = data[:, :, 0]
+    if data.dtype.kind not in "fiu" or data.ndim != 2 or data.shape[1] != len(names):
+        raise DataError(
+            f"{where}: dataSet must be real (samples, channels) with one column per channel name "
+            f"{names}, got {data.dtype} {data.shape}"
+        )
+    domain = np.asarray(p.get("domainValues", np.nan), dtype=float).ravel()
+    if domain.size == data.shape[0] and np.all(np.isfinite(domain)):  # explicit sample times
+        return domain, data.astype(float), names, None
+    incr = _scalar(p.get("domainIncr"))  # domainValues = NaN: uniform, domainStart + k * domainIncr
+    if incr is None:
+        raise DataError(f"{where}: domainIncr must be a sampling increment > 0 s, got {p.get('domainIncr')}")
+    start = np.asarray(p.get("domainStart", 0.0), dtype=float).ravel()
+    t = (float(start[0]) if start.size else 0.0) + np.arange(data.shape[0]) * incr
+    return t, data.astype(float), names, 1.0 / incr
+
+
+def _read_mat(path: Path) -> list[JointRecord]:
+    variables = _load_mat_file(path)
+    if not variables:
+        raise DataError(f"{path.name}: holds no variables; expected {_MAT_LAYOUTS}")
+    found = "; ".join(f"{k} ({_describe(v)})" for k, v in sorted(variables.items()))
+    if _is_trial_fields(variables):  # plain top-level variables; other variables are ignored
+        t, pos, tq, fs = _from_fields(variables, path.name)
+        return [JointRecord(name=path.stem, t_s=t, position=pos, torque=tq, fs_hz=fs, path=path)]
+    trials: dict[str, tuple] = {}  # variable -> (t, position, torque, fs)
+    slow: dict[str, tuple] = {}  # variable -> (t, position, fs): position-only nldat
+    unmapped = []
+    for var, value in sorted(variables.items()):
+        where = f"{path.name}: variable {var!r}"
+        fields = _fields(value)
+        if fields is not None and _is_trial_fields(fields):
+            trials[var] = _from_fields(fields, where)
+        elif getattr(value, "classname", None) == "nldat":
+            t, data, names, fs = _from_nldat(value, where)
+            pos, tq = _nldat_roles(names, _texts(value.properties.get("chanUnits")), where)
+            used = pos + tq if len(pos) == 1 and len(tq) <= 1 else []  # other channels are ignored
+            if used:  # only the channels used are checked
+                fs_t = _check_samples(where, t, {names[i]: data[:, i] for i in used}, "sample")
+                fs = fs_t if fs is None else fs
+            if used and tq:
+                trials[var] = (t, data[:, pos[0]], data[:, tq[0]], fs)
+            elif used and data.shape[1] == 1:  # a lone position: candidate operating point
+                slow[var] = (t, data[:, 0], fs)
+            else:
+                unmapped.append(var)
+        elif fields is not None or hasattr(value, "classname"):
+            unmapped.append(var)  # an object or struct we cannot read as a trial
+        # plain arrays and strings beside objects are ignored, like extra CSV columns
+    operating: dict[str, tuple[str, np.ndarray]] = {}
+    for var, (t, angle, _fs) in slow.items():
+        same = [
+            k for k, tr in trials.items() if tr[0].size == t.size and np.allclose(tr[0], t, rtol=0, atol=1e-9)
+        ]
+        if len(same) != 1 or same[0] in operating:
+            unmapped.append(var)
+        else:
+            operating[same[0]] = (var, angle)
+    if unmapped or not trials:
+        bad = sorted(unmapped) if trials else sorted(variables)
+        raise DataError(
+            f"{path.name}: cannot map variable(s) {bad} to a position and a torque channel; variables "
+            f"found: {found}. Expected {_MAT_LAYOUTS} (a single position-only nldat with the time base "
+            f"of exactly one trial is that trial's operating point)"
+        )
+    several = len(trials) > 1
+    return [
+        JointRecord(
+            name=f"{path.stem}/{var}" if several else path.stem,
+            t_s=t,
+            position=pos,
+            torque=tq,
+            fs_hz=fs,
+            path=path,
+            operating_point=operating[var][1] if var in operating else None,
+        )
+        for var, (t, pos, tq, fs) in trials.items()
+    ]
+
+
+# --- public entry points --------------------------------------------------------------------------
+def _read_file(path: Path) -> list[JointRecord]:
+    suffix = path.suffix.lower()
+    if suffix == ".csv":
+        return [_read_csv(path)]
+    if suffix == ".mat":
+        return _read_mat(path)
+    raise DataError(
+        f"{path.name}: unsupported file type {path.suffix or '(no extension)'!r}; supported: "
+        f"{list(SUPPORTED_SUFFIXES)} or a folder holding such files"
+    )
+
+
+def load_joint_data(path: Path | str, *, min_duration_s: float = 0.0) -> tuple[JointRecord, ...]:
+    """Read joint-perturbation trials from one file or a folder (format in docs/data_import.md).
+
+    Args:
+        path: a ``.csv`` file (one trial), a ``.mat`` file (one trial per mapped variable), or a
+            folder: every ``*.csv`` and ``*.mat`` in it, by file name, not recursive.
+        min_duration_s: s, refuse any trial shorter than this (``n_samples / fs_hz``).
+
+    Returns:
+        The trials, in file-name order and, within a ``.mat``, variable-name order.
+
+    Raises:
+        DataError: the path does not exist or has an unsupported suffix; a folder holds no
+            supported file, has files of different sample rates or two trials of one name; a
+            file's columns or variables are missing or unmappable, its cells non-numeric or
+            non-finite, its time not strictly increasing or not uniformly sampled; a trial is
+            shorter than ``min_duration_s``.
+    """
+    path = Path(path)
+    if not (math.isfinite(min_duration_s) and min_duration_s >= 0):
+        raise DataError(f"min_duration_s must be a finite number of seconds >= 0, got {min_duration_s}")
+    if not path.exists():
+        raise DataError(
+            f"{path} does not exist; expected a {' or '.join(SUPPORTED_SUFFIXES)} file or a folder of them"
+        )
+    if path.is_dir():
+        files = sorted(
+            (p for p in path.iterdir() if p.is_file() and p.suffix.lower() in SUPPORTED_SUFFIXES),
+            key=lambda p: p.name,
+        )
+        if not files:
+            raise DataError(
+                f"{path}: no trial files; looked for {', '.join('*' + s for s in SUPPORTED_SUFFIXES)} "
+                f"directly in the folder (subfolders are not searched)"
+            )
+    else:
+        files = [path]
+    records = [r for f in files for r in _read_file(f)]
+    names = [r.name for r in records]
+    dup = sorted({n for n in names if names.count(n) > 1})
+    if dup:
+        raise DataError(f"{path}: several trials named {dup}; rename the files so each trial name is unique")
+    for r in records:
+        if r.duration_s < min_duration_s:
+            raise DataError(
+                f"{r.path.name}: trial {r.name!r} lasts {r.duration_s:.9g} s, shorter than "
+                f"min_duration_s = {min_duration_s:.9g} s"
+            )
+    ref = records[0].fs_hz
+    if path.is_dir() and any(abs(r.fs_hz - ref) > _RATE_RTOL * ref for r in records):
+        rates = ", ".join(f"{r.name}: {r.fs_hz:.9g} Hz" for r in records)
+        raise DataError(
+            f"{path}: the files have different sample rates ({rates}); one folder must hold one rate "
+            f"(resample, or load the files separately)"
+        )
+    return tuple(records)
+
+
+def write_joint_csv(
+    path: Path | str,
+    record: JointRecord | None = None,
+    *,
+    t_s: np.ndarray | None = None,
+    position: np.ndarray | None = None,
+    torque: np.ndarray | None = None,
+    operating_point: np.ndarray | None = None,
+    overwrite: bool = False,
+) -> Path:
+    """Write one trial as a CSV that :func:`load_joint_data` reads back.
+
+    Columns :data:`JOINT_COLUMNS`, or :data:`TIME_VARYING_COLUMNS` when an operating point is
+    given. Signals are written with 9 significant digits (``%.9g``, relative rounding <= 5e-9),
+    time with 15 (``%.15g``: exact for decimal times such as k/1000 s, and fine enough for the
+    uniformity check at any rate).
+
+    Args:
+        path: the ``.csv`` file to create.
+        record: the trial; or, instead, the arrays below.
+        t_s: (n,) s, strictly increasing with a constant step.
+        position: (n,) rad.
+        torque: (n,) N·m.
+        operating_point: (n,) rad, optional (taken from ``record`` when a record is given).
+        overwrite: replace an existing file; by default an existing file is refused.
+
+    Returns:
+        The path written.
+    """
+    path = Path(path)
+    if record is not None:
+        if any(v is not None for v in (t_s, position, torque, operating_point)):
+            raise DataError(
+                "write_joint_csv: give a JointRecord or the arrays t_s, position, torque, not both"
+            )
+        t_s, position, torque, operating_point = (
+            record.t_s,
+            record.position,
+            record.torque,
+            record.operating_point,
+        )
+    if t_s is None or position is None or torque is None:
+        raise DataError("write_joint_csv: give a JointRecord or all three arrays t_s, position and torque")
+    if path.suffix.lower() != ".csv":
+        raise DataError(f"{path.name}: write_joint_csv writes CSV; the file name must end in .csv")
+    columns = JOINT_COLUMNS if operating_point is None else TIME_VARYING_COLUMNS
+    values = [np.asarray(v, dtype=float) for v in (t_s, position, torque, operating_point)[: len(columns)]]
+    if any(v.ndim != 1 or v.shape != values[0].shape for v in values):
+        raise DataError(f"{path.name}: arrays must be 1-D of one length, got {[v.shape for v in values]}")
+    _check_samples(path.name, values[0], dict(zip(columns[1:], values[1:], strict=True)), "row")
+    fmt = [_TIME_FMT] + [_SIGNAL_FMT] * (len(columns) - 1)
+    try:
+        with path.open("w" if overwrite else "x", encoding="utf-8", newline="\n") as fh:
+            np.savetxt(
+                fh, np.column_stack(values), delimiter=",", header=",".join(columns), comments="", fmt=fmt
+            )
+    except FileExistsError:
+        raise DataError(f"{path}: file already exists; pass overwrite=True to replace it") from None
+    except FileNotFoundError:
+        raise DataError(f"{path}: folder {path.parent} does not exist; create it first") from None
+    return path
