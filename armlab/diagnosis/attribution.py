@@ -49,8 +49,8 @@ class AttributionRules:
 
 def held_out_gap(model: FittedModel, trials, y_band) -> tuple[float, float, list[float]]:
     """(pooled gap, held-out RSS, per-trial gap) of a fitted model."""
-    rss = [float(np.sum(r[~tr.train] ** 2)) for r, tr in zip(model.residuals, trials, strict=True)]
-    tss = [float(np.sum(y[~tr.train] ** 2)) for y, tr in zip(y_band, trials, strict=True)]
+    rss = [float(np.sum(r[tr.held] ** 2)) for r, tr in zip(model.residuals, trials, strict=True)]
+    tss = [float(np.sum(y[tr.held] ** 2)) for y, tr in zip(y_band, trials, strict=True)]
     return sum(rss) / sum(tss), sum(rss), [a / b for a, b in zip(rss, tss, strict=True)]
 
 
@@ -105,7 +105,7 @@ def select_effects(
     stages = [nominal]
     gap0, _, _ = held_out_gap(nominal, trials, y_band)
     excess0 = max(gap0 - floor, 0.0)
-    n_h = sum(int(np.sum(~tr.train)) for tr in trials)
+    n_h = sum(int(np.sum(tr.held)) for tr in trials)
     n_eff = max(n_h * band_share, 10.0)
     rankings: list[list[dict]] = []
     indistinct: list[dict] = []

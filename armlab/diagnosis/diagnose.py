@@ -93,8 +93,8 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
     hp = highpass_sos(fs, cfg.highpass_hz)
     y_band = [signal.sosfiltfilt(hp, tr.y) for tr in trials]
     noise = noise_floor(records, trials, band_hz=cfg.band_hz, highpass_hz=cfg.highpass_hz)
-    n_h = sum(int(np.sum(~tr.train)) for tr in trials)
-    tss = sum(float(np.sum(y[~tr.train] ** 2)) for y, tr in zip(y_band, trials, strict=True))
+    n_h = sum(int(np.sum(tr.held)) for tr in trials)
+    tss = sum(float(np.sum(y[tr.held] ** 2)) for y, tr in zip(y_band, trials, strict=True))
     floor = noise.variance_Nm2 * n_h / tss
     names = candidate_names(cfg)
     sel = select_effects(

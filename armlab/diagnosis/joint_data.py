@@ -3,9 +3,14 @@
 Every trial (position in, torque out, as imported by :mod:`armlab.data.joint_import`) becomes a
 :class:`PreparedTrial` at the fitting rate:
 
-1. zero-phase 4th-order Butterworth low-pass at ``band_hz`` of position and torque at the
-   recorded rate (anti-alias; identical on both channels, so their relative timing is kept);
-2. velocity and acceleration by central differences at the recorded rate;
+1. velocity and acceleration by central differences of the raw position at the recorded rate;
+2. zero-phase 4th-order Butterworth low-pass at ``band_hz`` of position, velocity, acceleration
+   and torque at the recorded rate (anti-alias; identical on every channel, so their relative
+   timing is kept). Differentiating first keeps the filtered torque the same linear combination
+   of the filtered x, v, a up to the trial's ends (filtering first and differentiating after
+   does not, near an end where the joint is moving); the filter's edge padding is even, so the
+   first and last samples are band-limited too (odd padding pins them to the raw, full-band
+   noisy values);
 3. decimation to ``fs_fit_hz`` (every q-th sample);
 4. the slow torque ``m(t)`` (zero-phase low-pass at ``slow_hz``, zero mean, unit rms): the
    subject's tonic contraction level, the covariate of the co-contraction candidate.
@@ -53,7 +58,8 @@ class PreparedTrial:
         x, v, a: rad, rad/s, rad/s², band-limited joint angle and its derivatives.
         y: N·m, band-limited measured torque.
         m: 1, slow torque (tonic level), zero mean and unit rms.
-        train: bool mask of the fitting part; ``~train`` is held out.
+        train: bool mask of the fitting part (first ``1 - holdout_fraction``, edges excluded).
+        held: bool mask of the held-out part (the rest, edges excluded).
         fs_hz: Hz, the fitting rate.
         raw_fs_hz: Hz, the recorded rate.
     """
@@ -66,13 +72,14 @@ class PreparedTrial:
     y: np.ndarray
     m: np.ndarray
     train: np.ndarray
+    held: np.ndarray
     fs_hz: float
     raw_fs_hz: float
 
 
 def _zero_phase_lowpass(z: np.ndarray, fc: float, fs: float, order: int = 4) -> np.ndarray:
     sos = signal.butter(order, fc, fs=fs, output="sos")
-    return signal.sosfiltfilt(sos, z, axis=-1)
+    return signal.sosfiltfilt(sos, z, axis=-1, padtype="even")
 
 
 def prepare_trials(
@@ -83,6 +90,7 @@ def prepare_trials(
     holdout_fraction: float,
     slow_hz: float,
     min_duration_s: float,
+    edge_s: float = 2.0,
 ) -> tuple[PreparedTrial, ...]:
     """Band-limit, differentiate, decimate and split imported trials.
 
@@ -94,6 +102,9 @@ def prepare_trials(
         holdout_fraction: the last fraction of every trial held out for scoring.
         slow_hz: Hz, cut-off of the slow (tonic) torque.
         min_duration_s: s, shortest acceptable trial.
+        edge_s: s, excluded at both ends of every trial from fitting and scoring: the zero-phase
+            filters (and any start-up transient of the record) disturb the first and last
+            samples; 2 s is four time constants of the 0.3 Hz scoring high-pass.
 
     Raises:
         DataError: no trials, sample rates that differ, a trial too short, or a band the
@@ -121,16 +132,24 @@ def prepare_trials(
                 f"trial {r.name!r} lasts {n / fs:.2f} s; the diagnosis needs at least {min_duration_s:g} s "
                 "(training part, held-out part and the filter edges)"
             )
-        x = _zero_phase_lowpass(np.asarray(r.position, float), band_hz, fs)
-        y = _zero_phase_lowpass(np.asarray(r.torque, float), band_hz, fs)
-        v = np.gradient(x, 1.0 / fs)
-        a = np.gradient(v, 1.0 / fs)
+        xr = np.asarray(r.position, float)
+        vr = np.gradient(xr, 1.0 / fs, edge_order=2)
+        ar = np.gradient(vr, 1.0 / fs, edge_order=2)
+        x, v, a, y = (_zero_phase_lowpass(z, band_hz, fs) for z in (xr, vr, ar, np.asarray(r.torque, float)))
         slow = _zero_phase_lowpass(np.asarray(r.torque, float), slow_hz, fs, order=2)[::q]
         slow = slow - slow.mean()
         rms = float(np.sqrt(np.mean(slow**2)))
         m = slow / rms if rms > 0 else slow
         nd = x[::q].size
-        train = np.arange(nd) < int(round((1.0 - holdout_fraction) * nd))
+        idx = np.arange(nd)
+        inner = (idx >= edge_s * fs_fit) & (idx < nd - edge_s * fs_fit)
+        first = idx < int(round((1.0 - holdout_fraction) * nd))
+        if inner.sum() < 0.5 * nd:
+            raise DataError(
+                f"trial {r.name!r} lasts {n / fs:.2f} s; {edge_s:g} s at each end are not scored, "
+                "which leaves less than half of it"
+            )
+        train, held = inner & first, inner & ~first
         out.append(
             PreparedTrial(
                 name=r.name,
@@ -141,6 +160,7 @@ def prepare_trials(
                 y=y[::q],
                 m=m,
                 train=train,
+                held=held,
                 fs_hz=fs_fit,
                 raw_fs_hz=fs,
             )

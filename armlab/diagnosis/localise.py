@@ -27,7 +27,7 @@ WINDOWS_MS = ((0, 20), (20, 60), (60, 120), (120, 250), (250, 400))
 
 
 def _held(trials, arrays):
-    return [z[~tr.train] for z, tr in zip(arrays, trials, strict=True)]
+    return [z[tr.held] for z, tr in zip(arrays, trials, strict=True)]
 
 
 def band_breakdown(trials, y_band, residuals, noise) -> list[dict]:
@@ -78,7 +78,7 @@ def window_breakdown(trials, y_band, residuals, noise_var: float) -> list[dict]:
         idx = np.arange(tr.t_s.size)
         pos = np.searchsorted(on, idx, side="right") - 1
         since = np.where(pos >= 0, (idx - on[np.clip(pos, 0, None)]) / tr.fs_hz * 1e3, np.inf)
-        held = ~tr.train
+        held = tr.held
         since_all.append(since[held])
         r_all.append(r[held])
         y_all.append(y[held])
@@ -115,7 +115,7 @@ def residual_tests(trials, residuals, *, max_lag_s: float = 0.25, min_lag_s: flo
     ccf = np.zeros(lags.size)
     n_total = 0
     for tr, r in zip(trials, residuals, strict=True):
-        held = ~tr.train
+        held = tr.held
         e = r[held] - r[held].mean()
         u = tr.v[held] - tr.v[held].mean()
         n = e.size

@@ -4,6 +4,10 @@
 only inside its functions.
 """
 
+from armlab.viz.diagnosis import (
+    diagnosis_figures,
+    diagnosis_recording,
+)
 from armlab.viz.figures import (
     plot_error_vs_window,
     plot_validation,
@@ -41,4 +45,6 @@ __all__ = [
     "format_vfs_tables",
     "plot_vfs_figures",
     "write_vfs_recording",
+    "diagnosis_figures",
+    "diagnosis_recording",
 ]

@@ -1,0 +1,51 @@
+"""Benchmark of `armlab diagnose` (run by `make bench`).
+
+Target (issue 5): one diagnosis with about ten candidates under 60 s on the 2-core CI machine.
+Times the diagnosis alone (import, preparation, noise floor, every candidate fitted in each
+greedy step, where/how-far breakdowns; no figures) on
+
+- a referee dataset of the joint_1dof protocol (4 trials x 30 s at 1 kHz, a hidden reflex), and
+- the six real REKLAB ankle recordings pooled (5 x 60 s + 106 s at 1 kHz), when present.
+"""
+
+from __future__ import annotations
+
+import tempfile
+import time
+from pathlib import Path
+
+from armlab.config.diagnosis import DiagnosisConfig, RefereeConfig
+from armlab.data.reklab import DEFAULT_REKLAB_ROOT
+from armlab.diagnosis.diagnose import candidate_names
+from armlab.diagnosis.referee import make_dataset
+from armlab.protocols.diagnosis_run import run_diagnoser
+
+TARGET_S = 60.0  # s, issue 5
+
+
+def _time(folder: Path, cfg: DiagnosisConfig) -> tuple[float, dict]:
+    t0 = time.perf_counter()
+    results, _ = run_diagnoser(folder, "joint_1dof", cfg)
+    return time.perf_counter() - t0, results
+
+
+def main() -> None:
+    cfg = DiagnosisConfig()
+    n_cand = len(candidate_names(cfg))
+    with tempfile.TemporaryDirectory() as tmp:
+        ds = make_dataset("reflex", 0, RefereeConfig(), cfg, Path(tmp) / "trials")
+        wall, res = _time(ds.folder, cfg)
+    print(
+        f"diagnose joint_1dof referee dataset (4 x 30 s, {n_cand} candidates): {wall:.1f} s "
+        f"(target < {TARGET_S:.0f} s) verdict {res['verdict']}"
+    )
+    if DEFAULT_REKLAB_ROOT.is_dir():
+        wall, res = _time(DEFAULT_REKLAB_ROOT, cfg)
+        print(
+            f"diagnose joint_1dof REKLAB ankle folder ({len(res['trials'])} trials, {n_cand} candidates): "
+            f"{wall:.1f} s (target < {TARGET_S:.0f} s) verdict {res['verdict']}"
+        )
+
+
+if __name__ == "__main__":
+    main()
