@@ -242,6 +242,11 @@ def _effects(args: list[str]) -> int:
     if protocol is not None and not names:
         protocols = sorted({p for c in EFFECTS.values() for p in c.PROTOCOLS})
         return _fail(f"no effects for protocol {protocol!r}; valid protocols: {protocols}")
+    if protocol is None or protocol == "joint_1dof":
+        from armlab.diagnosis.joint_models import JOINT_SURROGATES
+
+        print(f"candidates of `armlab diagnose protocol=joint_1dof`: {', '.join(JOINT_SURROGATES)}")
+        print("(the others can be simulated but leave no gap this protocol can score)\n")
     for name in names:
         cls = EFFECTS[name]
         params = ", ".join(f"{k}={v:g}" for k, v in cls().params().items())

@@ -226,7 +226,7 @@ class EncoderQuantisation(Effect):
     LEVEL: ClassVar[str] = "sensor"
     PHYSICS: ClassVar[str] = "position rounded to the encoder's resolution before differentiation"
     SOURCE: ClassVar[str] = "16-bit absolute encoder: 2π/65536 rad ≈ 9.6e-5 rad; capstan rig 2 µm"
-    PROTOCOLS: ClassVar[tuple[str, ...]] = (_COND, _VFS, _FRAC)
+    PROTOCOLS: ClassVar[tuple[str, ...]] = (_JOINT, _COND, _VFS, _FRAC)
     step: float = 9.6e-5  # rad (joint) or m (Cartesian)
 
 

@@ -11,6 +11,12 @@ from armlab.models.ground_truth import (
     ground_truth,
     joint_impedance,
 )
+from armlab.models.joint_1dof_scene import (
+    PAYLOAD_OWN_INERTIA_KGM2,
+    Joint1DofScene,
+    JointSubject,
+    build_joint_1dof_scene,
+)
 from armlab.models.robot_fk import (
     RobotKinematics,
 )
@@ -34,6 +40,10 @@ from armlab.models.spring_array import (
 )
 
 __all__ = [
+    "Joint1DofScene",
+    "JointSubject",
+    "PAYLOAD_OWN_INERTIA_KGM2",
+    "build_joint_1dof_scene",
     "named_id",
     "table_i_array",
     "fixture_mjcf",

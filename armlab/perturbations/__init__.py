@@ -1,6 +1,7 @@
 """Perturbation waveforms applied by the robot to the arm."""
 
 from armlab.perturbations.multisine import ForceScenario, load_force_scenario, multisine
+from armlab.perturbations.prbs import prbs_position
 from armlab.perturbations.quintic import (
     PAPER_DIRECTIONS,
     QuinticPerturbation,
@@ -16,6 +17,7 @@ __all__ = [
     "multisine",
     "load_force_scenario",
     "ForceScenario",
+    "prbs_position",
     "PAPER_DIRECTIONS",
     "QuinticPerturbation",
     "conditioning_ratio",

@@ -8,6 +8,7 @@ from armlab.sim.hold import (
     preload_activations,
     settle,
 )
+from armlab.sim.joint_1dof import JointRecording, JointSubject, simulate_joint_1dof
 from armlab.sim.lab import (
     LabRecording,
     record_trials,
@@ -27,6 +28,9 @@ __all__ = [
     "simulate_force_trial",
     "ForceTrial",
     "HoldState",
+    "JointRecording",
+    "JointSubject",
+    "simulate_joint_1dof",
     "LabRecording",
     "SimResult",
     "preload_activations",
