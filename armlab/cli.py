@@ -260,13 +260,12 @@ def _effects(args: list[str]) -> int:
 
 
 def _benchmark(args: list[str]) -> int:
-    from armlab.diagnosis.benchmark_summary import format_benchmark
     from armlab.protocols.diagnosis_run import default_diagnosis_dir, run_benchmark
 
     named, rest = _keyed(args, ("out",), ("referee", "diagnosis"))
     out = Path(named["out"]) if named.get("out") else default_diagnosis_dir("diagnose-benchmark")
     out, summary = run_benchmark(rest, out)
-    print((out / "benchmark.md").read_text() if (out / "benchmark.md").is_file() else format_benchmark)
+    print((out / "benchmark.md").read_text())
     print(f"outputs: {out}")
     return 0
 

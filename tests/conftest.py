@@ -4,7 +4,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
 import pytest
+from scipy import signal
 
 from armlab.config.schema import ArmConfig, CuffConfig, RobotConfig, SimConfig
 from armlab.models.scene import Scene, build_scene
@@ -40,3 +42,131 @@ def make_lab(muscle: str, rigid: bool) -> Lab:
 )
 def lab(request) -> Lab:
     return make_lab(*request.param)
+
+
+# ---------------------------------------------------------------------------------------------
+# Synthetic 1-DoF joint trials for the diagnosis tests (tests/test_joint_*.py, test_localise.py,
+# test_attribution.py, test_diagnose.py): a position-imposed joint with known I, B, K and the
+# catalogue effects written directly in NumPy, independent of armlab.diagnosis.joint_models.
+# ---------------------------------------------------------------------------------------------
+
+JOINT_FS_HZ = 1000.0  # Hz, recorded rate
+JOINT_I = 0.02  # kg·m², ankle + foot inertia (Kearney & Hunter 1990 range 0.01-0.03)
+JOINT_B = 0.8  # N·m·s/rad, same source
+JOINT_K = 120.0  # N·m/rad, same source
+
+
+@dataclass(frozen=True, eq=False)
+class JointTrial:
+    """The fields :func:`armlab.diagnosis.joint_data.prepare_trials` reads from an imported trial."""
+
+    name: str
+    position: np.ndarray  # (n,) rad
+    torque: np.ndarray  # (n,) N·m
+    fs_hz: float = JOINT_FS_HZ
+
+
+def prbs_steps(rng, duration_s: float, *, amplitude=0.03, clock_s=0.15, fs_hz=JOINT_FS_HZ) -> np.ndarray:
+    """(n,) rad, a pseudo-random binary sequence: ±amplitude, a new random level every clock_s."""
+    n = int(round(duration_s * fs_hz))
+    clock = int(round(clock_s * fs_hz))
+    return np.repeat(amplitude * rng.choice([-1.0, 1.0], size=n // clock + 1), clock)[:n]
+
+
+def smooth(steps: np.ndarray, smooth_hz: float = 15.0, fs_hz: float = JOINT_FS_HZ) -> np.ndarray:
+    """Zero-phase 2nd-order Butterworth smoothing (the actuator's finite bandwidth)."""
+    return signal.sosfiltfilt(signal.butter(2, smooth_hz, fs=fs_hz, output="sos"), steps)
+
+
+def prbs_position(rng, duration_s: float, *, highpass_hz: float | None = None, **kw) -> np.ndarray:
+    """(n,) rad, smoothed PRBS; optionally high-passed (removes its sub-Hz content)."""
+    x = smooth(prbs_steps(rng, duration_s, **kw))
+    if highpass_hz is not None:
+        hp = signal.butter(2, highpass_hz, btype="highpass", fs=JOINT_FS_HZ, output="sos")
+        x = signal.sosfiltfilt(hp, x)
+    return x
+
+
+def joint_derivatives(x: np.ndarray, fs_hz: float = JOINT_FS_HZ) -> tuple[np.ndarray, np.ndarray]:
+    """(rad/s, rad/s²) by central differences (2nd-order accurate at the ends too)."""
+    v = np.gradient(x, 1.0 / fs_hz, edge_order=2)
+    return v, np.gradient(v, 1.0 / fs_hz, edge_order=2)
+
+
+def nominal_torque(x: np.ndarray, *, I=JOINT_I, B=JOINT_B, K=JOINT_K) -> np.ndarray:
+    """N·m, the measured torque of the nominal joint: it resists the motion, -(I·a + B·v + K·x)."""
+    v, a = joint_derivatives(x)
+    return -(I * a + B * v + K * x)
+
+
+def reflex_torque(x: np.ndarray, *, delay_s: float, gain: float, cutoff_hz: float = 3.0) -> np.ndarray:
+    """N·m, -gain × 2nd-order low-pass (ζ = 0.7) of the rectified velocity delayed by delay_s."""
+    v, _ = joint_derivatives(x)
+    t = np.arange(x.size) / JOINT_FS_HZ
+    w = 2 * np.pi * cutoff_hz
+    b, a = signal.bilinear([w * w], [1.0, 1.4 * w, w * w], JOINT_FS_HZ)
+    return -gain * signal.lfilter(b, a, np.maximum(np.interp(t - delay_s, t, v, left=0.0), 0.0))
+
+
+def friction_torque(x: np.ndarray, *, coulomb: float) -> np.ndarray:
+    """N·m, Coulomb friction -coulomb·sign(v)."""
+    v, _ = joint_derivatives(x)
+    return -coulomb * np.sign(v)
+
+
+def delayed(z: np.ndarray, delay_s: float) -> np.ndarray:
+    """z(t - delay_s), the channel at rest (its first value) before the start."""
+    t = np.arange(z.size) / JOINT_FS_HZ
+    return np.interp(t - delay_s, t, z, left=z[0])
+
+
+def lowpassed(z: np.ndarray, cutoff_hz: float) -> np.ndarray:
+    """Causal 2nd-order Butterworth low-pass (a sensor's bandwidth), started at rest on z[0]."""
+    b, a = signal.butter(2, cutoff_hz, fs=JOINT_FS_HZ)
+    return signal.lfilter(b, a, z - z[0]) + z[0]
+
+
+def compliant_torque(x: np.ndarray, *, k: float, I=JOINT_I, B=JOINT_B, K=JOINT_K) -> np.ndarray:
+    """N·m, the joint Z = I·s² + B·s + K behind a series spring k: -k·Z/(Z + k) applied to x."""
+    b, a = signal.bilinear([k * I, k * B, k * K], [I, B, K + k], JOINT_FS_HZ)
+    return -(signal.lfilter(b, a, x - x[0]) + k * K / (K + k) * x[0])
+
+
+def slow_activation(rng, n: int, *, depth: float, bandwidth_hz: float = 0.2) -> np.ndarray:
+    """(n,) 1, zero-mean slow co-contraction fluctuation of rms ``depth``."""
+    c = signal.sosfiltfilt(signal.butter(2, bandwidth_hz, fs=JOINT_FS_HZ, output="sos"), rng.normal(size=n))
+    c = c - c.mean()
+    return depth * c / np.sqrt(np.mean(c**2))
+
+
+def cocontraction_torque(x: np.ndarray, c: np.ndarray, *, tonic_Nm: float) -> np.ndarray:
+    """N·m, stiffness and damping scaled by 1 + c(t), plus the tonic torque tonic_Nm·(1 + c)."""
+    v, a = joint_derivatives(x)
+    return -(JOINT_I * a + (1.0 + c) * (JOINT_B * v + JOINT_K * x)) + tonic_Nm * (1.0 + c)
+
+
+def joint_trials(x: np.ndarray, torque_fn, rng, *, repeats: int = 2, noise_std: float = 0.15):
+    """``repeats`` recordings of one position sequence, each with its own white torque noise."""
+    return [
+        JointTrial(f"rep{k}", x, torque_fn(x) + rng.normal(0.0, noise_std, x.size)) for k in range(repeats)
+    ]
+
+
+def prepared(records, cfg=None, **kw):
+    """(trials, scoring high-pass, measured torque in the scoring band) as diagnose_joint makes them
+    (``kw``: further arguments of prepare_trials, e.g. ``edge_s``)."""
+    from armlab.config.diagnosis import DiagnosisConfig
+    from armlab.diagnosis.joint_data import highpass_sos, prepare_trials
+
+    cfg = cfg or DiagnosisConfig()
+    trials = prepare_trials(
+        records,
+        fs_fit_hz=cfg.fs_fit_hz,
+        band_hz=cfg.band_hz,
+        holdout_fraction=cfg.holdout_fraction,
+        slow_hz=cfg.slow_hz,
+        min_duration_s=cfg.min_duration_s,
+        **kw,
+    )
+    hp = highpass_sos(trials[0].fs_hz, cfg.highpass_hz)
+    return trials, hp, [signal.sosfiltfilt(hp, tr.y) for tr in trials]

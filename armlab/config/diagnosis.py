@@ -35,7 +35,7 @@ class DiagnosisConfig:
     highpass_hz: float = 0.3  # Hz, below: voluntary/tonic torque, not scored
     slow_hz: float = 0.3  # Hz, tonic-level covariate of the co-contraction candidate
     holdout_fraction: float = 1.0 / 3.0  # last third held out (REKLAB: fit 0-40 s, score 40-60 s)
-    min_duration_s: float = 6.0  # s, shortest trial accepted
+    min_duration_s: float = 10.0  # s, shortest trial accepted (2 s edges + fit + held-out parts)
     per_trial: bool = False  # diagnose every trial on its own (different subjects/conditions)
     max_effects: int = 3
     bic_margin: float = 10.0  # penalised-score improvement needed to accept an effect

@@ -38,7 +38,9 @@ def summarise(cases: list[dict]) -> dict:
     effect_cases = [c for c in cases if c["class"] != "none"]
     strong = [c for c in effect_cases if c["enr"] >= 1.0]
     none_cases = [c for c in cases if c["class"] == "none"]
-    shrink = [c["shrink_of_excess"] for c in cases if c["top1"] and c["class"] not in ("none",)]
+    # shrink of the cases correctly attributed to effects ("unknown" on a left-out class is correct
+    # but adds nothing, so it has no shrink to score)
+    shrink = [c["shrink_of_excess"] for c in cases if c["top1"] and c["predicted"] not in ("none", "unknown")]
     shrink = [s for s in shrink if np.isfinite(s)]
     by_enr = []
     for lo, hi in zip(ENR_BINS[:-1], ENR_BINS[1:], strict=True):

@@ -227,15 +227,22 @@ def noise_floor(records, prepared, *, band_hz: float, highpass_hz: float, nperse
     hp = highpass_sos(fs, highpass_hz)
     groups = repeat_groups(records)
     if groups:
+        # over the scored samples only (``train | held``): the excluded ends carry the filters'
+        # start and end transients, which the scores never see
         diffs = [
-            (signal.sosfiltfilt(hp, prepared[g[k]].y) - signal.sosfiltfilt(hp, prepared[g[0]].y))
-            / np.sqrt(2.0)
+            (
+                (signal.sosfiltfilt(hp, prepared[g[k]].y) - signal.sosfiltfilt(hp, prepared[g[0]].y))
+                / np.sqrt(2.0)
+            )[prepared[g[0]].train | prepared[g[0]].held]
             for g in groups
             for k in range(1, len(g))
         ]
         var = float(np.mean([np.var(d) for d in diffs]))
-        f, p = signal.welch(np.stack(diffs), fs=fs, nperseg=min(nperseg, diffs[0].size))
-        return NoiseFloor(variance_Nm2=var, psd=p.mean(axis=0), f_hz=f, source="repeats")
+        # groups of repeats may differ in length: one Welch segment length for all, then average
+        nper = min(nperseg, min(d.size for d in diffs))
+        f = signal.welch(diffs[0], fs=fs, nperseg=nper)[0]
+        p = np.mean([signal.welch(d, fs=fs, nperseg=nper)[1] for d in diffs], axis=0)
+        return NoiseFloor(variance_Nm2=var, psd=p, f_hz=f, source="repeats")
     raw_fs = prepared[0].raw_fs_hz
     s2 = float(np.mean([np.mean(np.diff(np.asarray(r.torque, float), 2) ** 2) / 6.0 for r in records]))
     f = np.fft.rfftfreq(nperseg, 1.0 / fs)

@@ -67,10 +67,34 @@ def _lp2(z: np.ndarray, fc: float, zeta: float, fs: float) -> np.ndarray:
 
 
 def _shift(t: np.ndarray, z: np.ndarray, delay: float) -> np.ndarray:
-    """z(t - delay), zero before the start (columns along axis 0)."""
+    """z(t - delay), held at its first value before the start (columns along axis 0).
+
+    Holding (not zeroing) matches a recorded channel: before the trial it read its resting value;
+    a zero there would add a step at the start that the data lack.
+    """
     if z.ndim == 1:
-        return np.interp(t - delay, t, z, left=0.0, right=z[-1])
+        return np.interp(t - delay, t, z, left=z[0], right=z[-1])
     return np.stack([_shift(t, z[:, k], delay) for k in range(z.shape[1])], axis=1)
+
+
+def _friction(v: np.ndarray, velocity: float, release_s: float, fs: float) -> np.ndarray:
+    """Coulomb friction, ``tanh(v / velocity)`` while sliding, relaxing with ``release_s`` at rest.
+
+    The friction force follows the sliding direction while the joint moves and, once it stops,
+    the static (pre-sliding) force left in the contact decays with time constant ``release_s``
+    rather than vanishing at once: ``f[k] = s[k]`` if ``|s[k]| > decay·|f[k-1]|`` else
+    ``decay·f[k-1]``, ``s = tanh(v / velocity)``. ``release_s`` → 0 is the plain smoothed
+    Coulomb law.
+    """
+    s = np.tanh(v / velocity)
+    decay = float(np.exp(-1.0 / (release_s * fs)))
+    out = np.empty_like(s)
+    prev = 0.0
+    for k, sk in enumerate(s.tolist()):
+        held = decay * prev
+        prev = sk if abs(sk) > abs(held) else held
+        out[k] = prev
+    return out
 
 
 def _compliance(tr: PreparedTrial, tau2: float, tau1: float, ratio: float) -> np.ndarray:
@@ -97,7 +121,11 @@ def _columns(tr: PreparedTrial, model: tuple[Surrogate, ...], theta: dict[str, f
         stretch = np.maximum(s * _shift(tr.t_s, tr.v, d), 0.0)
         cols.append(s * _lp2(stretch, theta["reflex.cutoff_hz"], 0.7, tr.fs_hz))
     if "joint_friction" in names:
-        cols.append(np.tanh(tr.v / theta["joint_friction.velocity_rad_s"]))
+        cols.append(
+            _friction(
+                tr.v, theta["joint_friction.velocity_rad_s"], theta["joint_friction.release_s"], tr.fs_hz
+            )
+        )
     if "cocontraction_variation" in names:
         cols += [tr.m * tr.x, tr.m * tr.v]
     phi = np.stack(cols, axis=1)
@@ -138,7 +166,10 @@ JOINT_SURROGATES: dict[str, Surrogate] = {
         Surrogate(
             "joint_friction",
             "additive",
-            (NLParam("velocity_rad_s", 1e-3, 0.5, (0.003, 0.01, 0.03, 0.1), log=True),),
+            (
+                NLParam("velocity_rad_s", 1e-3, 0.5, (0.003, 0.01, 0.03), log=True),
+                NLParam("release_s", 0.002, 0.3, (0.004, 0.02, 0.05, 0.1), log=True),
+            ),
             ("coulomb",),
         ),
         Surrogate(

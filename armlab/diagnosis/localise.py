@@ -76,8 +76,10 @@ def window_breakdown(trials, y_band, residuals, noise_var: float) -> list[dict]:
     for tr, y, r in zip(trials, y_band, residuals, strict=True):
         on = onsets(tr)
         idx = np.arange(tr.t_s.size)
-        pos = np.searchsorted(on, idx, side="right") - 1
-        since = np.where(pos >= 0, (idx - on[np.clip(pos, 0, None)]) / tr.fs_hz * 1e3, np.inf)
+        since = np.full(idx.size, np.inf)  # ms; no onset at all (a still trial): never "after" one
+        if on.size:
+            pos = np.searchsorted(on, idx, side="right") - 1
+            since = np.where(pos >= 0, (idx - on[np.clip(pos, 0, None)]) / tr.fs_hz * 1e3, np.inf)
         held = tr.held
         since_all.append(since[held])
         r_all.append(r[held])

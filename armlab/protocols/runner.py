@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 from omegaconf import OmegaConf
 
+from armlab.config.effects import enabled_effects
 from armlab.config.schema import EstimatorConfig, ExperimentConfig, FrfConfig, VfsConfig
 from armlab.config.store import apply_overrides, to_experiment
 from armlab.data.h5io import read_trials, write_trials
@@ -157,6 +158,12 @@ def _run(cfg: ExperimentConfig, out_dir: Path, config_yaml: str, timing: dict) -
     from armlab import viz  # the only place figures and recordings are made
 
     simulate, outputs = _RUNS[cfg.protocol_name]
+    on = list(enabled_effects(cfg.effects))
+    if on:  # never silently ignore a switched-on effect
+        raise ConfigError(
+            f"effects {on} are not simulated by protocol {cfg.protocol_name!r} yet; they are applied by the "
+            "joint_1dof simulation (armlab.sim.joint_1dof, used by `armlab diagnose-benchmark`)"
+        )
     t0 = time.perf_counter()
     sim = simulate(cfg)
     timing["simulate_s"] = time.perf_counter() - t0

@@ -1,0 +1,141 @@
+"""armlab.diagnosis.attribution: greedy selection of effects, verdicts none/unknown, indistinct pairs.
+
+Data as in test_joint_models.py (I = 0.02 kg·m², B = 0.8 N·m·s/rad, K = 120 N·m/rad, smoothed
+PRBS ±0.03 rad), two 12 s repeats with 0.15 N·m torque noise (the referee's sensor noise).
+"""
+
+from __future__ import annotations
+
+from dataclasses import fields
+
+import numpy as np
+import pytest
+from conftest import (
+    JOINT_K,
+    compliant_torque,
+    friction_torque,
+    joint_trials,
+    nominal_torque,
+    prbs_position,
+    prepared,
+    reflex_torque,
+)
+
+from armlab.config.diagnosis import DiagnosisConfig
+from armlab.diagnosis import attribution as at
+from armlab.diagnosis.attribution import AttributionRules, held_out_gap, select_effects
+from armlab.diagnosis.joint_data import noise_floor
+from armlab.diagnosis.joint_models import JOINT_SURROGATES, fit_model
+
+_CFG = DiagnosisConfig()
+_BAND_SHARE = (_CFG.band_hz - _CFG.highpass_hz) / (0.5 * _CFG.fs_fit_hz)
+
+
+def _select(torque_fn, names, *, seed=0, rules=None):
+    rng = np.random.default_rng(seed)
+    records = joint_trials(prbs_position(rng, 12.0), torque_fn, rng, noise_std=0.15)
+    trials, hp, y_band = prepared(records, _CFG)
+    noise = noise_floor(records, trials, band_hz=_CFG.band_hz, highpass_hz=_CFG.highpass_hz)
+    n_h = sum(int(tr.held.sum()) for tr in trials)
+    floor = (
+        noise.variance_Nm2
+        * n_h
+        / sum(float(np.sum(y[tr.held] ** 2)) for y, tr in zip(y_band, trials, strict=True))
+    )
+    cands = {n: JOINT_SURROGATES[n] for n in names}
+    return select_effects(
+        trials, y_band, hp, cands, floor, rules or AttributionRules(), band_share=_BAND_SHARE
+    )
+
+
+def _reflex(x):
+    return nominal_torque(x) + reflex_torque(x, delay_s=0.04, gain=2.0)
+
+
+def test_every_name_in_all_resolves():
+    for name in at.__all__:
+        assert getattr(at, name) is not None
+
+
+def test_rules_default_to_the_diagnosis_config_defaults():
+    rules = AttributionRules()
+    for f in fields(AttributionRules):
+        assert getattr(rules, f.name) == getattr(_CFG, f.name), f.name
+
+
+def test_held_out_gap_is_residual_over_measured_power_on_the_held_out_parts():
+    rng = np.random.default_rng(0)
+    trials, hp, y_band = prepared(joint_trials(prbs_position(rng, 10.0), nominal_torque, rng))
+    model = fit_model(trials, y_band, (), hp)
+    gap, rss, per_trial = held_out_gap(model, trials, y_band)
+    r = [m[tr.held] for m, tr in zip(model.residuals, trials, strict=True)]
+    y = [m[tr.held] for m, tr in zip(y_band, trials, strict=True)]
+    assert rss == pytest.approx(sum(float(np.sum(z**2)) for z in r))
+    assert gap == pytest.approx(rss / sum(float(np.sum(z**2)) for z in y))
+    assert per_trial == pytest.approx([np.sum(a**2) / np.sum(b**2) for a, b in zip(r, y, strict=True)])
+
+
+def test_noise_alone_gives_none():
+    sel = _select(nominal_torque, ["reflex", "joint_friction", "channel_delay"])
+    assert sel.verdict == ["none"]
+    assert len(sel.stages) == 1 and sel.stages[0].effects == ()
+    assert {e["name"] for e in sel.rankings[0]} == {"reflex", "joint_friction", "channel_delay"}
+    assert all(e["delta_bic"] > -_CFG.bic_margin for e in sel.rankings[0])
+    assert sel.indistinct == []
+
+
+def test_one_effect_well_above_noise_is_found():
+    sel = _select(_reflex, ["reflex", "joint_friction", "channel_delay"])
+    assert sel.verdict == ["reflex"]
+    best = sel.rankings[0][0]
+    assert best["name"] == "reflex" and best["delta_bic"] < -_CFG.bic_margin
+    assert best["explained_fraction"] > 0.9
+    assert best["params"]["reflex.delay_s"] == pytest.approx(0.04, abs=0.005)
+    assert [e["delta_bic"] for e in sel.rankings[0]] == sorted(e["delta_bic"] for e in sel.rankings[0])
+    assert sel.stages[-1].effects == ("reflex",)
+    # the second step found nothing more: it ranked the two others and stopped
+    assert [e["name"] for e in sel.rankings[1]] != [] and "reflex" not in {e["name"] for e in sel.rankings[1]}
+
+
+def test_effect_left_out_of_the_candidates_gives_unknown():
+    sel = _select(_reflex, ["joint_friction", "channel_delay"])
+    assert sel.verdict == ["unknown"]
+    assert len(sel.stages) == 1
+
+
+def test_two_effects_are_selected_in_turn():
+    def torque(x):
+        return _reflex(x) + friction_torque(x, coulomb=0.3)
+
+    sel = _select(torque, ["reflex", "joint_friction"])
+    assert sel.verdict == ["reflex", "joint_friction"]
+    assert [s.effects for s in sel.stages] == [(), ("reflex",), ("reflex", "joint_friction")]
+    one = _select(torque, ["reflex", "joint_friction"], rules=AttributionRules(max_effects=1))
+    assert one.verdict == ["reflex"]
+
+
+def test_compliances_are_flagged_indistinct_with_the_trial_that_separates_them():
+    sel = _select(
+        lambda x: compliant_torque(x, k=4.0 * JOINT_K), ["transmission_compliance", "cuff_compliance"]
+    )
+    assert len(sel.verdict) == 1 and sel.verdict[0] in ("transmission_compliance", "cuff_compliance")
+    (pair,) = sel.indistinct
+    assert set(pair["effects"]) == {"transmission_compliance", "cuff_compliance"}
+    assert pair["effects"][0] == sel.verdict[0]
+    assert pair["separating_trial"] == "an accelerometer on the handle/pedal beside the motor encoder"
+    assert pair["reductions"][1] >= 0.9 * pair["reductions"][0]
+
+
+def test_payload_mass_is_listed_but_never_selected():
+    sel = _select(nominal_torque, ["payload_mass", "channel_delay"])
+    assert sel.verdict == ["none"]
+    entry = next(e for e in sel.rankings[0] if e["name"] == "payload_mass")
+    assert entry["identifiable"] is False and entry["model"] is None
+    assert entry["gap_reduction"] == 0.0 and entry["delta_bic"] == 0.0
+    assert sel.indistinct == [
+        {
+            "effects": ["payload_mass", "limb inertia"],
+            "reductions": [0.0, 0.0],
+            "separating_trial": "empty-handle trials (no subject attached)",
+        }
+    ]

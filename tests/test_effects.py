@@ -1,0 +1,134 @@
+"""armlab.config.effects: the catalogue of unmodelled effects, its YAML options and composition."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import fields
+
+import pytest
+import yaml
+
+from armlab.cli import compose
+from armlab.config import effects as fx
+from armlab.config.effects import EFFECTS, LEVELS, EffectsConfig, effect_names, enabled_effects
+from armlab.config.store import CONFIG_DIR, available_options
+from armlab.errors import ConfigError
+
+
+def test_every_name_in_all_resolves():
+    for name in fx.__all__:
+        assert getattr(fx, name) is not None
+
+
+def test_catalogue_entries_are_documented_and_switchable():
+    assert list(EFFECTS) == [f.name for f in fields(EffectsConfig)]
+    for name, cls in EFFECTS.items():
+        assert cls.NAME == name
+        assert cls.LEVEL in LEVELS
+        assert cls.PHYSICS and cls.SOURCE and cls.PROTOCOLS
+        assert set(cls.SIGNED) <= {f.name for f in fields(cls)}
+        params = cls().params()
+        assert params and all(isinstance(v, float) and math.isfinite(v) for v in params.values())
+
+
+def test_confusable_compliances_name_each_other_and_one_separating_trial():
+    cuff, transmission = EFFECTS["cuff_compliance"], EFFECTS["transmission_compliance"]
+    assert cuff.CONFUSABLE["transmission_compliance"] == transmission.CONFUSABLE["cuff_compliance"]
+
+
+def test_yaml_options_only_repeat_the_dataclass_defaults():
+    # the dataclass is the single source of truth: every YAML option sets known fields to them
+    assert available_options("effects") == sorted(EFFECTS)
+    for name, cls in EFFECTS.items():
+        path = CONFIG_DIR / "effects" / f"{name}.yaml"
+        assert path.read_text().startswith("# @package effects\n")
+        values = yaml.safe_load(path.read_text())[name]
+        assert values == {k: v for k, v in cls().params().items() if k in values}
+        assert set(values) == set(cls().params())
+
+
+@pytest.mark.parametrize(
+    ("cls", "kw", "message"),
+    [
+        (fx.Reflex, {"delay_s": -0.01}, "effects.reflex.delay_s must be finite and >= 0, got -0.01"),
+        (
+            fx.JointFriction,
+            {"coulomb_Nm": math.inf},
+            "effects.joint_friction.coulomb_Nm must be finite and >= 0",
+        ),
+        (fx.ChannelDelay, {"delay_s": math.nan}, "effects.channel_delay.delay_s must be finite, got nan"),
+        (
+            fx.CuffCompliance,
+            {"damping_Nms_per_rad": -1},
+            "effects.cuff_compliance.damping_Nms_per_rad must be",
+        ),
+    ],
+)
+def test_bad_parameter_values_are_refused(cls, kw, message):
+    with pytest.raises(ConfigError) as err:
+        cls(**kw)
+    assert message in str(err.value)
+
+
+def test_signed_parameters_may_be_negative():
+    assert fx.ChannelDelay(delay_s=-0.004).delay_s == -0.004  # force channel ahead of position
+    assert fx.Reflex(direction=-1.0).direction == -1.0
+    assert fx.ForceSensorDrift(bias=-0.2, drift_per_s=-0.01).params() == {"bias": -0.2, "drift_per_s": -0.01}
+
+
+def test_effect_names_by_protocol():
+    assert effect_names() == tuple(EFFECTS)
+    joint = effect_names("joint_1dof")
+    assert {"reflex", "joint_friction", "channel_delay", "cuff_compliance"} <= set(joint)
+    assert "cable_drag" not in joint and "plane_tilt" not in joint
+    assert effect_names("virtual_force_sensor")[0] == "reflex" and "cable_drag" in effect_names(
+        "virtual_force_sensor"
+    )
+    assert effect_names("no_such_protocol") == ()
+
+
+def test_enabled_effects_in_catalogue_order():
+    cfg = EffectsConfig(joint_friction=fx.JointFriction(), reflex=fx.Reflex(delay_s=0.03))
+    on = enabled_effects(cfg)
+    assert list(on) == ["reflex", "joint_friction"]
+    assert on["reflex"].delay_s == 0.03
+    assert enabled_effects(EffectsConfig()) == {}
+
+
+def test_compose_switches_effects_on_and_tunes_them():
+    _, exp = compose(["effects=[reflex,joint_friction]", "effects.reflex.delay_s=0.05"])
+    on = enabled_effects(exp.effects)
+    assert list(on) == ["reflex", "joint_friction"]
+    assert on["reflex"] == fx.Reflex(delay_s=0.05)
+    assert on["joint_friction"] == fx.JointFriction()
+
+
+def test_compose_without_effects_leaves_all_off():
+    _, exp = compose([])
+    assert enabled_effects(exp.effects) == {}
+
+
+@pytest.mark.parametrize(
+    ("overrides", "message"),
+    [
+        (["effects=[reflex,nope]"], "unknown effect(s) ['nope']; valid: ['accel_misalignment', "),
+        (
+            ["effects.reflex.delay_s=0.05"],
+            "effects.reflex.delay_s=0.05: effect 'reflex' is not switched on; add effects=[reflex] "
+            "(selected: none)",
+        ),
+        (
+            ["effects=[joint_friction]", "effects.reflex.gain_Nms_per_rad=3"],
+            "effect 'reflex' is not switched on; add effects=[reflex] (selected: ['joint_friction'])",
+        ),
+        (
+            ["effects=[reflex]", "effects.reflex.delay_s=-0.01"],
+            "effects.reflex.delay_s must be finite and >= 0, got -0.01",
+        ),
+        (["effects=[reflex]", "effects.reflex.nope=1"], "Could not override 'effects.reflex.nope'"),
+    ],
+)
+def test_compose_errors_name_the_problem(overrides, message):
+    with pytest.raises(ConfigError) as err:
+        compose(overrides)
+    assert message in str(err.value)
