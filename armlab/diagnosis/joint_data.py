@@ -62,6 +62,11 @@ class PreparedTrial:
         held: bool mask of the held-out part (the rest, edges excluded).
         fs_hz: Hz, the fitting rate.
         raw_fs_hz: Hz, the recorded rate.
+        x_raw, v_raw: (n_raw,) rad, rad/s, unfiltered angle and velocity at the recorded rate:
+            nonlinear and resonant model columns are computed from them and then band-limited
+            and decimated like the torque (:meth:`to_fit_rate`), since a nonlinearity of a
+            band-limited signal is not the band-limited nonlinearity.
+        band_hz: Hz, the anti-alias cut-off.
     """
 
     name: str
@@ -75,11 +80,19 @@ class PreparedTrial:
     held: np.ndarray
     fs_hz: float
     raw_fs_hz: float
+    x_raw: np.ndarray
+    v_raw: np.ndarray
+    band_hz: float
+
+    def to_fit_rate(self, z_raw: np.ndarray) -> np.ndarray:
+        """A raw-rate signal (n_raw,) or (n_raw, k) band-limited and decimated like the torque."""
+        q = int(round(self.raw_fs_hz / self.fs_hz))
+        return _zero_phase_lowpass(z_raw, self.band_hz, self.raw_fs_hz, axis=0)[::q]
 
 
-def _zero_phase_lowpass(z: np.ndarray, fc: float, fs: float, order: int = 4) -> np.ndarray:
+def _zero_phase_lowpass(z: np.ndarray, fc: float, fs: float, order: int = 4, axis: int = -1) -> np.ndarray:
     sos = signal.butter(order, fc, fs=fs, output="sos")
-    return signal.sosfiltfilt(sos, z, axis=-1, padtype="even")
+    return signal.sosfiltfilt(sos, z, axis=axis, padtype="even")
 
 
 def prepare_trials(
@@ -163,6 +176,9 @@ def prepare_trials(
                 held=held,
                 fs_hz=fs_fit,
                 raw_fs_hz=fs,
+                x_raw=xr,
+                v_raw=vr,
+                band_hz=band_hz,
             )
         )
     return tuple(out)
@@ -242,7 +258,24 @@ def noise_floor(records, prepared, *, band_hz: float, highpass_hz: float, nperse
         nper = min(nperseg, min(d.size for d in diffs))
         f = signal.welch(diffs[0], fs=fs, nperseg=nper)[0]
         p = np.mean([signal.welch(d, fs=fs, nperseg=nper)[1] for d in diffs], axis=0)
+        white = _difference_floor(records, prepared, band_hz, hp)
+        if white.variance_Nm2 < var:
+            # the repeats also differ by the subject's trial-to-trial variability (e.g. its
+            # co-contraction level), which a candidate can explain from a covariate
+            return NoiseFloor(
+                variance_Nm2=white.variance_Nm2,
+                psd=white.psd,
+                f_hz=white.f_hz,
+                source=f"{white.source}; below the repeats' estimate {var:.3g} N·m²",
+            )
         return NoiseFloor(variance_Nm2=var, psd=p, f_hz=f, source="repeats")
+    return _difference_floor(records, prepared, band_hz, hp)
+
+
+def _difference_floor(records, prepared, band_hz, hp) -> NoiseFloor:
+    """Noise floor from second differences of the raw torque (white noise assumed)."""
+    fs = prepared[0].fs_hz
+    nperseg = 512
     raw_fs = prepared[0].raw_fs_hz
     s2 = float(np.mean([np.mean(np.diff(np.asarray(r.torque, float), 2) ** 2) / 6.0 for r in records]))
     f = np.fft.rfftfreq(nperseg, 1.0 / fs)

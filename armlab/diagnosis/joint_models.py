@@ -72,9 +72,18 @@ def _shift(t: np.ndarray, z: np.ndarray, delay: float) -> np.ndarray:
     Holding (not zeroing) matches a recorded channel: before the trial it read its resting value;
     a zero there would add a step at the start that the data lack.
     """
-    if z.ndim == 1:
-        return np.interp(t - delay, t, z, left=z[0], right=z[-1])
-    return np.stack([_shift(t, z[:, k], delay) for k in range(z.shape[1])], axis=1)
+    # exact fractional delay of a band-limited signal: a linear phase in the frequency domain
+    # (linear interpolation between samples would low-pass the delayed signal); the signal is
+    # padded with its end values so the circular wrap stays outside the record
+    fs = 1.0 / (t[1] - t[0])
+    pad = int(np.ceil(abs(delay) * fs)) + 8
+    zz = np.concatenate([np.repeat(z[:1], pad, axis=0), z, np.repeat(z[-1:], pad, axis=0)], axis=0)
+    f = np.fft.rfftfreq(zz.shape[0], 1.0 / fs)
+    phase = np.exp(-2j * np.pi * f * delay)
+    if zz.ndim > 1:
+        phase = phase[:, None]
+    out = np.fft.irfft(np.fft.rfft(zz, axis=0) * phase, n=zz.shape[0], axis=0)
+    return out[pad : pad + z.shape[0]]
 
 
 def _friction(v: np.ndarray, velocity: float, release_s: float, fs: float) -> np.ndarray:
@@ -122,8 +131,13 @@ def _columns(tr: PreparedTrial, model: tuple[Surrogate, ...], theta: dict[str, f
         cols.append(s * _lp2(stretch, theta["reflex.cutoff_hz"], 0.7, tr.fs_hz))
     if "joint_friction" in names:
         cols.append(
-            _friction(
-                tr.v, theta["joint_friction.velocity_rad_s"], theta["joint_friction.release_s"], tr.fs_hz
+            tr.to_fit_rate(
+                _friction(
+                    tr.v_raw,
+                    theta["joint_friction.velocity_rad_s"],
+                    theta["joint_friction.release_s"],
+                    tr.raw_fs_hz,
+                )
             )
         )
     if "cocontraction_variation" in names:
