@@ -23,8 +23,9 @@ the rest (the REKLAB lab's own 0-40 s / 40-60 s split).
 Noise floor: the torque noise variance in the scoring band, from repeated trials (trials whose
 positions correlate above 0.99 are repeats of one perturbation: ``var(y_i - y_j) / 2``) or, with
 no repeats, from the second differences of the raw torque (Rice 1984, Ann. Statist. 12:1215:
-``E[(Δ²y)²] = 6σ²`` for white noise on a signal slow compared with the sampling), scaled to the
-band on the assumption that the sensor noise is white.
+``E[(Δ²y)²] = 6σ²`` for white noise on a signal slow compared with the sampling; the scale is
+taken robustly as 1.4826·MAD), scaled to the band on the assumption that the sensor noise is
+white. With repeats, the smaller of the two estimates is used.
 """
 
 from __future__ import annotations
@@ -277,7 +278,15 @@ def _difference_floor(records, prepared, band_hz, hp) -> NoiseFloor:
     fs = prepared[0].fs_hz
     nperseg = 512
     raw_fs = prepared[0].raw_fs_hz
-    s2 = float(np.mean([np.mean(np.diff(np.asarray(r.torque, float), 2) ** 2) / 6.0 for r in records]))
+
+    # robust scale of the second differences (1.4826·MAD): the signal's own second differences
+    # are sparse spikes (acceleration steps of a pseudo-random perturbation) that a mean square
+    # would count as noise
+    def mad2(z):
+        d = np.diff(np.asarray(z, float), 2)
+        return (1.4826 * float(np.median(np.abs(d - np.median(d))))) ** 2 / 6.0
+
+    s2 = float(np.mean([mad2(r.torque) for r in records]))
     f = np.fft.rfftfreq(nperseg, 1.0 / fs)
     # white noise of variance s2 over 0..raw_fs/2 has the one-sided density 2*s2/raw_fs; the
     # zero-phase (forward-backward) filters apply their power gain twice

@@ -1,0 +1,55 @@
+"""The referee of the diagnosis: pseudo-real datasets and a small blind benchmark (CI size)."""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from armlab.config.diagnosis import DiagnosisConfig, RefereeConfig
+from armlab.data.joint_import import load_joint_data
+from armlab.diagnosis.referee import JOINT_CLASSES, expected_verdict, make_dataset
+from armlab.errors import DataError
+from armlab.protocols.diagnosis_run import run_benchmark
+
+
+def test_dataset_is_deterministic_and_holds_no_truth_in_its_trial_folder(tmp_path):
+    ref = RefereeConfig(trial_s=12.0)
+    a = make_dataset("reflex", 0, ref, DiagnosisConfig(), tmp_path / "a")
+    b = make_dataset("reflex", 0, ref, DiagnosisConfig(), tmp_path / "b")
+    assert sorted(p.name for p in a.folder.iterdir()) == [f"seq{i % 2}_rep{i // 2}.csv" for i in (0, 2, 1, 3)]
+    ta, tb = load_joint_data(a.folder), load_joint_data(b.folder)
+    for x, y in zip(ta, tb, strict=True):
+        np.testing.assert_array_equal(x.torque, y.torque)
+    # repeats share the perturbation, not the noise
+    np.testing.assert_array_equal(ta[0].position, ta[1].position)
+    assert not np.array_equal(ta[0].torque, ta[1].torque)
+    assert a.enr > 0 and a.truth["hidden"] == ["reflex"]
+    with pytest.raises(FileExistsError):
+        make_dataset("reflex", 0, ref, DiagnosisConfig(), tmp_path / "a")
+
+
+def test_classes_cover_none_singles_a_pair_and_a_left_out_effect():
+    assert len(JOINT_CLASSES) >= 9
+    assert expected_verdict("none") == {"none"}
+    assert expected_verdict("left_out:reflex") == {"unknown"}
+    assert expected_verdict("reflex+joint_friction") == {"reflex", "joint_friction"}
+
+
+def test_small_blind_benchmark(tmp_path):
+    # CI size: four classes, one replicate each, evaluation seeds; the full 10 x 10 run is
+    # `armlab diagnose-benchmark` (make test-all runs it through test_full_benchmark)
+    overrides = [
+        "referee.replicates=1",
+        "referee.trial_s=20",
+        "referee.classes=[none,reflex,force_sensor_bandwidth,left_out:reflex]",
+    ]
+    out, summary = run_benchmark(overrides, tmp_path / "bench")
+    assert summary["n_cases"] == 4
+    assert summary["false_alarm_none"] == 0.0
+    assert summary["top1"] >= 0.75
+    cases = json.loads((out / "benchmark.json").read_text())["cases"]
+    assert {c["class"] for c in cases} == {"none", "reflex", "force_sensor_bandwidth", "left_out:reflex"}
+    with pytest.raises(DataError, match="never overwrites"):
+        run_benchmark(overrides, out)
