@@ -15,12 +15,9 @@ low frequency (the torque/position phase is near ±180 deg below ~2 Hz), so an i
 
 from __future__ import annotations
 
-from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
-
-from armlab.data.joint_import import load_joint_data
+from armlab.data.joint_import import JointRecord, load_joint_data
 from armlab.errors import DataError
 
 __all__ = [
@@ -34,37 +31,10 @@ __all__ = [
 DEFAULT_REKLAB_ROOT: Path = Path(__file__).resolve().parents[3] / "shared" / "data" / "reklab_ankle"
 
 
-@dataclass(frozen=True, kw_only=True, eq=False)
-class AnkleTrial:
-    """One ankle recording.
-
-    Attributes:
-        t_s: (n,) s, time from the start of the record.
-        position: (n,) rad, ankle angle (perturbation, for ``tv_pilot``).
-        torque: (n,) N·m, ankle torque as recorded (perturbation part, for ``tv_pilot``).
-        fs_hz: Hz, sample rate (1 kHz for the REKLAB files).
-        name: trial name, the file stem (e.g. ``"z_df"``).
-        path: the file read.
-        operating_point: (n,) rad, slow ankle angle about which ``tv_pilot`` is perturbed; None
-            for the stationary trials.
-    """
-
-    t_s: np.ndarray
-    position: np.ndarray
-    torque: np.ndarray
-    fs_hz: float
-    name: str
-    path: Path
-    operating_point: np.ndarray | None = None
-
-    @property
-    def n_samples(self) -> int:
-        return int(self.t_s.size)
-
-    @property
-    def duration_s(self) -> float:
-        """s, ``n_samples / fs_hz``."""
-        return self.n_samples / self.fs_hz
+#: One ankle recording: the generic joint record (``t_s``, ``position`` rad, ``torque`` N·m as
+#: recorded, ``fs_hz``, ``name`` the file stem, ``path``, and ``operating_point`` rad for
+#: ``tv_pilot``, None otherwise).
+AnkleTrial = JointRecord
 
 
 def list_ankle_trials(root: Path | str = DEFAULT_REKLAB_ROOT) -> tuple[str, ...]:
@@ -90,12 +60,4 @@ def load_ankle_trial(name: str, root: Path | str = DEFAULT_REKLAB_ROOT) -> Ankle
         have = list_ankle_trials(root)
         raise DataError(f"no ankle trial {name!r}: {path} does not exist; available: {list(have) or 'none'}")
     (record,) = load_joint_data(path)  # parsing and every check: armlab.data.joint_import
-    return AnkleTrial(
-        t_s=record.t_s,
-        position=record.position,
-        torque=record.torque,
-        fs_hz=record.fs_hz,
-        name=name,
-        path=path,
-        operating_point=record.operating_point,
-    )
+    return record
