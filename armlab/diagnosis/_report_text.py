@@ -1,0 +1,310 @@
+"""Wording and number formatting of the diagnosis report (``report.md``, terminal summary).
+
+Labels of the candidates, percentages/VAF/score formatting, Markdown tables, and the sentences
+that say what a verdict, a cross-correlation peak or an onset window means. Private to
+:mod:`armlab.diagnosis.report`; pure string building.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from pathlib import PurePath
+from typing import Any
+
+#: Readable names of the joint_1dof candidates (the catalogue key is printed beside them).
+_LABELS = {
+    "reflex": "a stretch reflex",
+    "cuff_compliance": "cuff (limb–pedal interface) compliance",
+    "transmission_compliance": "transmission compliance",
+    "joint_friction": "joint friction",
+    "force_sensor_bandwidth": "the torque sensor's bandwidth",
+    "channel_delay": "a delay between the torque and position channels",
+    "cocontraction_variation": "slow co-contraction variation",
+    "payload_mass": "an unmodelled payload mass",
+}
+#: Units of the linear (per-trial) parameters.
+_UNITS = {
+    "I": "kg·m²",
+    "B": "N·m·s/rad",
+    "K": "N·m/rad",
+    "reflex.gain": "N·m·s/rad",
+    "joint_friction.coulomb": "N·m",
+    "cocontraction_variation.stiffness_slope": "N·m/rad",
+    "cocontraction_variation.damping_slope": "N·m·s/rad",
+    "compliance.gain": "N·m/rad",
+    "cuff_compliance.pedal_inertia": "kg·m²",
+}
+_FIGURE_CAPTIONS = {
+    "gap_by_band": "Held-out gap per frequency band, nominal and after each added effect, vs the noise floor",
+    "gap_by_window": "Held-out gap per window after perturbation onset, per stage, vs the noise floor",
+    "residual_correlation": (
+        "Residual autocorrelation (whiteness) and residual–velocity cross-correlation with the ±95 % bound"
+    ),
+    "time_overlay": "A few held-out seconds: measured, nominal and corrected torque",
+    "vaf_per_trial": "Held-out VAF per trial and stage, with the best VAF the noise allows",
+}
+_WHITE_FRACTION = 0.1  # autocorrelation lags outside the 95 % bound above which the residual is coloured
+
+
+# ---------------------------------------------------------------------------------------------
+# number formatting
+# ---------------------------------------------------------------------------------------------
+
+
+def _finite(x: Any) -> float | None:
+    try:
+        v = float(x)
+    except (TypeError, ValueError):
+        return None
+    return v if math.isfinite(v) else None
+
+
+def _pct(gap: Any) -> str:
+    """A gap fraction as a percentage with enough digits to be non-zero ("–" when missing)."""
+    v = _finite(gap)
+    if v is None:
+        return "–"
+    p = 100.0 * v
+    if abs(p) < 5e-4:
+        return "≈ 0 %"
+    if abs(p) >= 10:
+        return f"{p:.1f} %"
+    if abs(p) >= 0.1:
+        return f"{p:.2f} %"
+    return f"{p:.2g} %"
+
+
+def _vaf(gap: Any) -> str:
+    """VAF = 100 (1 - gap) % with as many decimals as the gap needs to show."""
+    v = _finite(gap)
+    if v is None:
+        return "–"
+    g = abs(100.0 * v)
+    digits = 1 if g >= 1 else 2 if g >= 0.1 else 3 if g >= 0.01 else 4
+    return f"{100.0 * (1.0 - v):.{digits}f} %"
+
+
+def _num(x: Any, sig: int = 3) -> str:
+    v = _finite(x)
+    if v is None:
+        return "–"
+    return f"{(v if abs(v) > 1e-12 else 0.0):.{sig}g}"
+
+
+def _score(x: Any) -> str:
+    """A penalised score (ΔBIC): whole numbers once it is large."""
+    v = _finite(x)
+    if v is None:
+        return "–"
+    return f"{v:.0f}" if abs(v) >= 100 else f"{v:.3g}"
+
+
+def _share(x: Any) -> str:
+    """A fraction (of the excess gap) as a percentage with one decimal, never "-0.0 %"."""
+    v = _finite(x)
+    return "–" if v is None else f"{round(100.0 * v, 1) + 0.0:.1f} %"
+
+
+def _ms(seconds: Any) -> str:
+    v = _finite(seconds)
+    return "–" if v is None else f"{1e3 * v:.0f} ms"
+
+
+def _part(x: float) -> str:
+    """A share in % with whole numbers in 1-99 % and two decimals near 0 or 100 %."""
+    p = 100.0 * x
+    return f"{p:.0f} %" if 1 <= p <= 99 else f"{p:.2f} %"
+
+
+def _ratio(gap: Any, floor: Any) -> str:
+    g, f = _finite(gap), _finite(floor)
+    if g is None or f is None or f <= 0:
+        return "–"
+    return f"{g / f:,.0f}×" if g / f >= 100 else f"{g / f:.3g}×"
+
+
+def _label(name: str) -> str:
+    return f"{_LABELS.get(name, name.replace('_', ' '))} (`{name}`)"
+
+
+def _effects_words(names: Sequence[str]) -> str:
+    if not names:
+        return "nominal"
+    return ", then ".join(_label(n) for n in names)
+
+
+def _stage_name(effects: Sequence[str]) -> str:
+    return "nominal" if not effects else "nominal + " + " + ".join(effects)
+
+
+def _table(header: Sequence[str], rows: Sequence[Sequence[Any]]) -> list[str]:
+    out = ["| " + " | ".join(header) + " |", "|" + "|".join("---" for _ in header) + "|"]
+    out += ["| " + " | ".join(str(c) for c in row) + " |" for row in rows]
+    return out
+
+
+def _own_params(name: str, params: Mapping[str, Any]) -> str:
+    """The candidate's own nonlinear parameters (``params`` also holds the earlier effects')."""
+    own = [(k.split(".", 1)[1], v) for k, v in params.items() if k.startswith(name + ".")]
+    return ", ".join(f"{k} = {_num(v)}" for k, v in own) or "–"
+
+
+# ---------------------------------------------------------------------------------------------
+# wording of the verdict and of the residual tests
+# ---------------------------------------------------------------------------------------------
+
+
+def _tolerance(results: Mapping[str, Any], settings: Mapping[str, Any] | None) -> float:
+    s = settings or results.get("settings") or {}
+    return float(s.get("none_tolerance", 0.25))
+
+
+def _verdict_paragraph(r: Mapping[str, Any], settings: Mapping[str, Any] | None) -> str:
+    verdict = list(r.get("verdict") or [])
+    gap = r["gap"]
+    nominal, floor = float(gap["nominal"]), float(gap["noise_floor"])
+    stages = r.get("how_far") or []
+    final = float(stages[-1]["held_out_gap"]) if stages else nominal
+    floor_words = f"noise floor {_pct(floor)} (the best VAF the sensor noise allows is {_vaf(floor)})"
+    excess0 = max(nominal - floor, 0.0)
+    if verdict == ["none"]:
+        return (
+            "**Verdict: no gap beyond measurement noise.** The nominal simulation already reaches a "
+            f"held-out VAF of {_vaf(nominal)} (gap {_pct(nominal)}) at the {floor_words}: its excess over "
+            f"the floor is within the {100 * _tolerance(r, settings):.0f} % tolerance. No unmodelled effect "
+            "is needed; the candidate ranking below is shown for completeness."
+        )
+    if verdict == ["unknown"] or not verdict:
+        ranking = r.get("ranking") or []
+        best = next((e for e in ranking if e.get("identifiable", True)), None)
+        best_words = (
+            f" The best candidate, {_label(best['name'])}, would lower the gap by only "
+            f"{_pct(best['gap_reduction'])} ({_share(best['explained_fraction'])} of the excess over "
+            f"the floor; Δ penalised score {_score(best['delta_bic'])})."
+            if best
+            else ""
+        )
+        return (
+            f"**Verdict: unknown — the gap is real but no catalogue effect explains it.** The nominal "
+            f"simulation's held-out VAF is {_vaf(nominal)} (gap {_pct(nominal)}), well above the "
+            f"{floor_words}, yet no candidate effect passed the acceptance rules.{best_words} See *Where* "
+            "for the band and the time after onset that hold the gap: the missing effect is probably not in "
+            "the catalogue, or it was left out by `candidates`/`exclude` in the settings."
+        )
+    removed = (nominal - final) / excess0 if excess0 > 0 else 0.0
+    if final - floor <= _tolerance(r, settings) * floor:
+        rest = "The corrected model reaches the noise floor: nothing measurable is left unexplained."
+    else:
+        rest = (
+            f"{'Together they remove' if len(verdict) > 1 else 'It removes'} {_part(removed)} of the "
+            f"gap above the noise floor; the remaining {_part(1 - removed)} (gap {_pct(final)}, "
+            f"{_ratio(final, floor)} the floor) is not explained by any catalogue effect (see *How far*)."
+        )
+    text = (
+        f"**Verdict: the gap is explained by {_effects_words(verdict)}.** Held-out VAF "
+        f"{_vaf(nominal)} → {_vaf(final)} (gap {_pct(nominal)} → {_pct(final)} of the measured torque "
+        f"power), {floor_words}. {rest}"
+    )
+    caution = [
+        p
+        for p in r.get("indistinct") or []
+        if p["effects"][0] in verdict and p["effects"][1] != "limb inertia"
+    ]
+    for p in caution:
+        a, b = p["effects"]
+        text += (
+            f" Caution: with these trials `{a}` cannot be told apart from `{b}`; {p['separating_trial']} "
+            "would separate them."
+        )
+    return text
+
+
+def _xcorr_meaning(lag_s: float, value: float, bound: float) -> str:
+    """What the peak of the residual–velocity cross-correlation points to."""
+    if abs(value) <= bound:
+        return (
+            "no significant residual–velocity correlation at any lag: what is left is not linearly related "
+            "to the recent joint motion"
+        )
+    ms = 1e3 * lag_s
+    if lag_s < -0.01:
+        return (
+            f"the residual *precedes* the velocity by {-ms:.0f} ms: the torque channel leads the position "
+            "channel (a delayed position channel) or anticipatory/voluntary activity"
+        )
+    if abs(lag_s) <= 0.01:
+        return (
+            "the residual moves with the velocity at (near) zero lag: an error in the instantaneous "
+            "impedance — damping, friction — or a channel skew or sensor low-pass of a few ms"
+        )
+    if lag_s < 0.025:
+        return (
+            f"the residual follows the velocity by {ms:.0f} ms: a torque-sensor low-pass or channel delay, "
+            "or a short-latency reflex component"
+        )
+    if lag_s <= 0.12:
+        return (
+            f"the residual follows the velocity by {ms:.0f} ms: a delayed response to stretch velocity, as a "
+            "stretch-reflex pathway leaves (40–50 ms latency at the ankle, Kearney et al. 1997)"
+        )
+    return (
+        f"the residual follows the velocity by {ms:.0f} ms: a slow or long-loop response (voluntary "
+        "reaction, co-contraction change)"
+    )
+
+
+def _window_meaning(lo: float, hi: float) -> str:
+    if hi <= 20:
+        return "right at onset: inertial or sensor dynamics (bandwidth, channel delay, compliance)"
+    if lo >= 20 and hi <= 120:
+        return "a delayed response after onset, at the latency of a stretch reflex"
+    return "late after onset: slow responses, or friction and tonic changes during the holds"
+
+
+# ---------------------------------------------------------------------------------------------
+# sections of one diagnosis
+# ---------------------------------------------------------------------------------------------
+
+
+def _noise_words(source: str) -> str:
+    if source.startswith("repeats"):
+        return (
+            "from repeated trials (trials whose positions correlate above 0.99 repeat one perturbation): "
+            "var(y_i − y_j)/2 in the scoring band — the most direct estimate."
+        )
+    return (
+        f"{source}: E[(Δ²y)²] = 6σ² for white noise (Rice 1984), scaled to the scoring band. With no "
+        "repeated trials this assumes white sensor noise; coloured noise or tremor would raise the true "
+        "floor."
+    )
+
+
+def _settings(results: Mapping[str, Any], data_path: str, sources: Sequence[str]) -> list[str]:
+    s = results.get("settings") or {}
+    out = ["## Settings and noise floor", ""]
+    out.append(f"- **Data:** `{data_path}`; protocol `{results.get('protocol', 'joint_1dof')}`.")
+    if s:
+        hold = float(s.get("holdout_fraction", 1 / 3))
+        out.append(
+            f"- **Scoring:** models fitted at {_num(s.get('fs_fit_hz'))} Hz on the first "
+            f"{100 * (1 - hold):.0f} % of every trial and scored on the last {100 * hold:.0f} %, in the band "
+            f"{_num(s.get('highpass_hz'))}–{_num(s.get('band_hz'))} Hz (below the high-pass the torque is "
+            "the subject's voluntary/tonic activity)."
+        )
+    for src in dict.fromkeys(sources):
+        out.append(f"- **Noise floor:** {_noise_words(src)}")
+    if s:
+        out += ["", *_table(["setting", "value"], [[f"`{k}`", f"`{v}`"] for k, v in s.items()])]
+    return out
+
+
+def _figures(figures: Sequence[str]) -> list[str]:
+    out = ["## Figures", ""]
+    if not figures:
+        return out + ["No figures were written for this run."]
+    for f in figures:
+        stem = PurePath(f).stem
+        caption = _FIGURE_CAPTIONS.get(stem, stem.replace("_", " "))
+        out += [f"- [{caption}]({f})", "", f"  ![{caption}]({f})", ""]
+    return out
