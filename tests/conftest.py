@@ -156,17 +156,6 @@ def prepared(records, cfg=None, **kw):
     """(trials, scoring high-pass, measured torque in the scoring band) as diagnose_joint makes them
     (``kw``: further arguments of prepare_trials, e.g. ``edge_s``)."""
     from armlab.config.diagnosis import DiagnosisConfig
-    from armlab.diagnosis.joint_data import highpass_sos, prepare_trials
+    from armlab.diagnosis.diagnose import prepare_scoring
 
-    cfg = cfg or DiagnosisConfig()
-    trials = prepare_trials(
-        records,
-        fs_fit_hz=cfg.fs_fit_hz,
-        band_hz=cfg.band_hz,
-        holdout_fraction=cfg.holdout_fraction,
-        slow_hz=cfg.slow_hz,
-        min_duration_s=cfg.min_duration_s,
-        **kw,
-    )
-    hp = highpass_sos(trials[0].fs_hz, cfg.highpass_hz)
-    return trials, hp, [signal.sosfiltfilt(hp, tr.y) for tr in trials]
+    return prepare_scoring(records, cfg or DiagnosisConfig(), **kw)

@@ -6,8 +6,6 @@ PRBS ±0.03 rad), two 12 s repeats with 0.15 N·m torque noise (the referee's se
 
 from __future__ import annotations
 
-from dataclasses import fields
-
 import numpy as np
 import pytest
 from conftest import (
@@ -23,7 +21,7 @@ from conftest import (
 
 from armlab.config.diagnosis import DiagnosisConfig
 from armlab.diagnosis import attribution as at
-from armlab.diagnosis.attribution import AttributionRules, held_out_gap, select_effects
+from armlab.diagnosis.attribution import held_out_gap, select_effects
 from armlab.diagnosis.joint_data import noise_floor
 from armlab.diagnosis.joint_models import JOINT_SURROGATES, fit_model
 
@@ -44,7 +42,7 @@ def _select(torque_fn, names, *, seed=0, rules=None):
     )
     cands = {n: JOINT_SURROGATES[n] for n in names}
     return select_effects(
-        trials, y_band, hp, cands, floor, rules or AttributionRules(), band_share=_BAND_SHARE
+        trials, y_band, hp, cands, floor, rules or DiagnosisConfig(), band_share=_BAND_SHARE
     )
 
 
@@ -55,12 +53,6 @@ def _reflex(x):
 def test_every_name_in_all_resolves():
     for name in at.__all__:
         assert getattr(at, name) is not None
-
-
-def test_rules_default_to_the_diagnosis_config_defaults():
-    rules = AttributionRules()
-    for f in fields(AttributionRules):
-        assert getattr(rules, f.name) == getattr(_CFG, f.name), f.name
 
 
 def test_held_out_gap_is_residual_over_measured_power_on_the_held_out_parts():
@@ -110,7 +102,7 @@ def test_two_effects_are_selected_in_turn():
     sel = _select(torque, ["reflex", "joint_friction"])
     assert sel.verdict == ["reflex", "joint_friction"]
     assert [s.effects for s in sel.stages] == [(), ("reflex",), ("reflex", "joint_friction")]
-    one = _select(torque, ["reflex", "joint_friction"], rules=AttributionRules(max_effects=1))
+    one = _select(torque, ["reflex", "joint_friction"], rules=DiagnosisConfig(max_effects=1))
     assert one.verdict == ["reflex"]
 
 

@@ -10,11 +10,10 @@ from __future__ import annotations
 import copy
 import json
 import re
-from dataclasses import dataclass
 
 import numpy as np
 import pytest
-from scipy import signal
+from conftest import JointTrial, friction_torque, nominal_torque, prbs_position, reflex_torque
 
 from armlab.config.diagnosis import DiagnosisConfig
 from armlab.config.effects import EFFECTS
@@ -22,38 +21,20 @@ from armlab.diagnosis.diagnose import diagnose_joint
 from armlab.diagnosis.report import format_report, format_summary
 from armlab.protocols._files import json_default
 
-FS_HZ = 1000.0
 CANDIDATES = ["reflex", "joint_friction", "channel_delay"]
 FIGURES = ["gap_by_band.png", "time_overlay.png"]
 
 
-@dataclass(frozen=True)
-class _Record:
-    name: str
-    position: np.ndarray  # rad
-    torque: np.ndarray  # N·m
-    fs_hz: float
-
-
 def _record(name: str, seed: int, *, reflex_gain: float, coulomb_Nm: float, duration_s: float = 10.0):
-    """A 1-DoF joint under random ±0.03 rad position steps (8 Hz actuator), torque from a known model."""
+    """A 1-DoF joint under a smoothed PRBS, torque from a known model (conftest) plus noise."""
     rng = np.random.default_rng(seed)
-    n = int(duration_s * FS_HZ)
-    level = np.zeros(n)
-    i, sign = 0, 1.0
-    while i < n:
-        hold = int(rng.uniform(0.15, 0.6) * FS_HZ)
-        level[i : i + hold] = 0.03 * sign
-        sign, i = -sign, i + hold
-    x = signal.sosfiltfilt(signal.butter(2, 8.0, fs=FS_HZ, output="sos"), level)
-    v = np.gradient(x, 1 / FS_HZ)
-    a = np.gradient(v, 1 / FS_HZ)
-    lag = int(0.045 * FS_HZ)  # 45 ms reflex latency (Kearney 1997)
-    w = 2 * np.pi * 3.0
-    b_lp, a_lp = signal.bilinear([w * w], [1.0, 2 * 0.7 * w, w * w], FS_HZ)
-    reflex = signal.lfilter(b_lp, a_lp, np.maximum(np.r_[np.zeros(lag), v[:-lag]], 0.0))
-    torque = -(0.015 * a + 1.0 * v + 80.0 * x) - reflex_gain * reflex - coulomb_Nm * np.tanh(v / 0.01)
-    return _Record(name, x, torque + 0.05 * rng.standard_normal(n), FS_HZ)
+    x = prbs_position(rng, duration_s)
+    torque = (
+        nominal_torque(x)
+        + reflex_torque(x, delay_s=0.045, gain=reflex_gain)  # 45 ms latency (Kearney 1997)
+        + friction_torque(x, coulomb=coulomb_Nm)
+    )
+    return JointTrial(name, x, torque + 0.05 * rng.standard_normal(x.size))
 
 
 def _records(reflex_gain=15.0, coulomb_Nm=1.5):

@@ -9,12 +9,11 @@ from __future__ import annotations
 import os
 import subprocess
 import sys
-from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 import pytest
-from scipy import signal
+from conftest import JointTrial, nominal_torque, prbs_position, reflex_torque
 
 import armlab.viz
 from armlab.config.diagnosis import DiagnosisConfig
@@ -23,7 +22,6 @@ from armlab.errors import DataError
 from armlab.viz import diagnosis_figures, diagnosis_recording
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
-FS_HZ = 1000.0
 FIGURES = [
     "gap_by_band.png",
     "gap_by_window.png",
@@ -33,32 +31,12 @@ FIGURES = [
 ]
 
 
-@dataclass(frozen=True)
-class _Record:
-    name: str
-    position: np.ndarray  # rad
-    torque: np.ndarray  # N·m
-    fs_hz: float
-
-
-def _record(name: str, seed: int, duration_s: float = 10.0) -> _Record:
+def _record(name: str, seed: int, duration_s: float = 10.0) -> JointTrial:
+    """A 1-DoF joint under a smoothed PRBS with a 45 ms reflex (conftest model) plus noise."""
     rng = np.random.default_rng(seed)
-    n = int(duration_s * FS_HZ)
-    level = np.zeros(n)
-    i, sign = 0, 1.0
-    while i < n:
-        hold = int(rng.uniform(0.15, 0.6) * FS_HZ)
-        level[i : i + hold] = 0.03 * sign
-        sign, i = -sign, i + hold
-    x = signal.sosfiltfilt(signal.butter(2, 8.0, fs=FS_HZ, output="sos"), level)
-    v = np.gradient(x, 1 / FS_HZ)
-    a = np.gradient(v, 1 / FS_HZ)
-    lag = int(0.045 * FS_HZ)
-    w = 2 * np.pi * 3.0
-    b_lp, a_lp = signal.bilinear([w * w], [1.0, 2 * 0.7 * w, w * w], FS_HZ)
-    reflex = signal.lfilter(b_lp, a_lp, np.maximum(np.r_[np.zeros(lag), v[:-lag]], 0.0))
-    torque = -(0.015 * a + 1.0 * v + 80.0 * x) - 15.0 * reflex + 0.05 * rng.standard_normal(n)
-    return _Record(name, x, torque, FS_HZ)
+    x = prbs_position(rng, duration_s)
+    torque = nominal_torque(x) + reflex_torque(x, delay_s=0.045, gain=15.0)
+    return JointTrial(name, x, torque + 0.05 * rng.standard_normal(x.size))
 
 
 @pytest.fixture(scope="module")

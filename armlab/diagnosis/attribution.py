@@ -21,30 +21,17 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from armlab.config.diagnosis import DiagnosisConfig
 from armlab.config.effects import EFFECTS
 from armlab.diagnosis.joint_models import FittedModel, Surrogate, fit_model
 
 __all__ = [
-    "AttributionRules",
     "Selection",
     "held_out_gap",
     "select_effects",
 ]
 
 _INCOMPATIBLE = {"cuff_compliance": "transmission_compliance", "transmission_compliance": "cuff_compliance"}
-
-
-@dataclass(frozen=True, kw_only=True)
-class AttributionRules:
-    """Thresholds of the selection (tuned on the referee's tuning seeds; see the issue note)."""
-
-    max_effects: int = 3
-    bic_margin: float = 10.0
-    min_step_fraction: float = 0.1
-    min_floor_fraction: float = 0.1
-    min_first_explained: float = 0.4
-    none_tolerance: float = 0.25
-    indistinct_ratio: float = 0.9
 
 
 def held_out_gap(model: FittedModel, trials, y_band) -> tuple[float, float, list[float]]:
@@ -87,7 +74,7 @@ def select_effects(
     hp,
     candidates: dict[str, Surrogate],
     floor: float,
-    rules: AttributionRules,
+    rules: DiagnosisConfig,
     *,
     band_share: float,
 ) -> Selection:
@@ -98,7 +85,9 @@ def select_effects(
             scoring high-pass.
         candidates: the surrogates to try, by name.
         floor: noise floor as a gap fraction.
-        rules: thresholds.
+        rules: the diagnosis settings holding the thresholds (``max_effects``, ``bic_margin``,
+            ``min_step_fraction``, ``min_floor_fraction``, ``min_first_explained``,
+            ``none_tolerance``, ``indistinct_ratio``).
         band_share: (band width) / (Nyquist frequency) of the scoring band, for ``n_eff``.
     """
     nominal = fit_model(trials, y_band, (), hp)

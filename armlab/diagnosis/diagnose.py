@@ -7,11 +7,13 @@ and the signals for figures/recordings out (files are written by the CLI; see
 
 from __future__ import annotations
 
+from dataclasses import asdict
+
 import numpy as np
 from scipy import signal
 
 from armlab.config.diagnosis import DiagnosisConfig
-from armlab.diagnosis.attribution import AttributionRules, held_out_gap, select_effects
+from armlab.diagnosis.attribution import held_out_gap, select_effects
 from armlab.diagnosis.joint_data import highpass_sos, noise_floor, prepare_trials
 from armlab.diagnosis.joint_models import JOINT_SURROGATES, FittedModel
 from armlab.diagnosis.localise import band_breakdown, frf_parameters, residual_tests, window_breakdown
@@ -19,6 +21,7 @@ from armlab.errors import ConfigError
 
 __all__ = [
     "candidate_names",
+    "prepare_scoring",
     "diagnose_joint",
 ]
 
@@ -34,18 +37,6 @@ def candidate_names(cfg: DiagnosisConfig) -> list[str]:
     if not out:
         raise ConfigError(f"no candidate effects left after exclude={cfg.exclude}; valid: {valid}")
     return out
-
-
-def _rules(cfg: DiagnosisConfig) -> AttributionRules:
-    return AttributionRules(
-        max_effects=cfg.max_effects,
-        bic_margin=cfg.bic_margin,
-        min_step_fraction=cfg.min_step_fraction,
-        min_floor_fraction=cfg.min_floor_fraction,
-        min_first_explained=cfg.min_first_explained,
-        none_tolerance=cfg.none_tolerance,
-        indistinct_ratio=cfg.indistinct_ratio,
-    )
 
 
 def _impedance(model: FittedModel, sign: float) -> list[dict]:
@@ -80,7 +71,11 @@ def _stage(model, trials, y_band, noise, floor, sign) -> dict:
     }
 
 
-def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
+def prepare_scoring(records, cfg: DiagnosisConfig, **kw):
+    """(prepared trials, scoring high-pass sections, measured torque in the scoring band).
+
+    ``kw``: further arguments of :func:`armlab.diagnosis.joint_data.prepare_trials` (``edge_s``).
+    """
     trials = prepare_trials(
         records,
         fs_fit_hz=cfg.fs_fit_hz,
@@ -88,10 +83,15 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
         holdout_fraction=cfg.holdout_fraction,
         slow_hz=cfg.slow_hz,
         min_duration_s=cfg.min_duration_s,
+        **kw,
     )
+    hp = highpass_sos(trials[0].fs_hz, cfg.highpass_hz)
+    return trials, hp, [signal.sosfiltfilt(hp, tr.y) for tr in trials]
+
+
+def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
+    trials, hp, y_band = prepare_scoring(records, cfg)
     fs = trials[0].fs_hz
-    hp = highpass_sos(fs, cfg.highpass_hz)
-    y_band = [signal.sosfiltfilt(hp, tr.y) for tr in trials]
     noise = noise_floor(records, trials, band_hz=cfg.band_hz, highpass_hz=cfg.highpass_hz)
     n_h = sum(int(np.sum(tr.held)) for tr in trials)
     tss = sum(float(np.sum(y[tr.held] ** 2)) for y, tr in zip(y_band, trials, strict=True))
@@ -103,7 +103,7 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
         hp,
         {n: JOINT_SURROGATES[n] for n in names},
         floor,
-        _rules(cfg),
+        cfg,
         band_share=(cfg.band_hz - cfg.highpass_hz) / (0.5 * fs),
     )
     nominal = sel.stages[0]
@@ -160,10 +160,7 @@ def diagnose_joint(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
         ``verdict`` per trial; ``series`` is keyed by trial name.
     """
     records = list(records)
-    settings = {
-        k: getattr(cfg, k)
-        for k in cfg.__dataclass_fields__  # noqa: SIM118 - dataclass fields, not a dict
-    }
+    settings = asdict(cfg)
     if not cfg.per_trial:
         results, series = _diagnose_group(records, cfg)
         results["protocol"] = "joint_1dof"

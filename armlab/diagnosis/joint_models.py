@@ -96,13 +96,16 @@ def _friction(v: np.ndarray, velocity: float, release_s: float, fs: float) -> np
     Coulomb law.
     """
     s = np.tanh(v / velocity)
-    decay = float(np.exp(-1.0 / (release_s * fs)))
-    out = np.empty_like(s)
-    prev = 0.0
-    for k, sk in enumerate(s.tolist()):
-        held = decay * prev
-        prev = sk if abs(sk) > abs(held) else held
-        out[k] = prev
+    # The recursion keeps, at sample k, the earlier s[j] with the largest |s[j]|·decay^(k-j):
+    # a running argmax of log|s[j]| + j/(release_s·fs), then that sample decayed to k.
+    rate = 1.0 / (release_s * fs)
+    k = np.arange(s.size)
+    with np.errstate(divide="ignore"):
+        score = np.log(np.abs(s)) + k * rate
+    best = np.maximum.accumulate(score)
+    j = np.maximum.accumulate(np.where(score >= best, k, 0))
+    out = s[j] * np.exp(-(k - j) * rate)
+    out[~np.isfinite(best)] = 0.0  # nothing has moved yet
     return out
 
 
@@ -326,7 +329,7 @@ def fit_model(
         predictions=tuple(y - r for y, r in zip(y_band, res, strict=True)),
         residuals=tuple(res),
         n_params=n_lin * len(trials) + len(free),
-        train_rss=float(np.sum(prob.train_residual(theta) ** 2)),
+        train_rss=float(sum(np.sum(r[tr.train] ** 2) for tr, r in zip(trials, res, strict=True))),
     )
 
 
@@ -346,6 +349,7 @@ def _refine(prob: _Problem, theta: dict, free: list[str], params: dict[str, NLPa
     def resid(u):
         return prob.train_residual({**theta, **{k: from_u(k, x) for k, x in zip(free, u, strict=True)}})
 
+    cost0 = float(np.sum(resid(u0) ** 2))
     sol = optimize.least_squares(resid, u0, bounds=(lo, hi), x_scale="jac", diff_step=1e-3, max_nfev=60)
     cand = {**theta, **{k: from_u(k, x) for k, x in zip(free, sol.x, strict=True)}}
-    return cand if np.sum(sol.fun**2) <= np.sum(resid(u0) ** 2) else theta
+    return cand if np.sum(sol.fun**2) <= cost0 else theta
