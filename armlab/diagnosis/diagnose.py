@@ -46,9 +46,8 @@ def _impedance(model: FittedModel, sign: float) -> list[dict]:
     ]
 
 
-def _stage(model, trials, y_band, noise, floor, sign) -> dict:
+def _stage(model, trials, y_band, noise, floor, sign, frf_meas) -> dict:
     gap, _, per_trial = held_out_gap(model, trials, y_band)
-    frf_meas = [frf_parameters(tr, y) for tr, y in zip(trials, y_band, strict=True)]
     frf_sim = [frf_parameters(tr, p) for tr, p in zip(trials, model.predictions, strict=True)]
     return {
         "effects": list(model.effects),
@@ -109,7 +108,8 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
     nominal = sel.stages[0]
     k_total = sum(float(np.mean(b[2])) for b in nominal.beta)
     sign = -1.0 if k_total < 0 else 1.0  # the impedance is -torque/position when antiphase
-    stages = [_stage(m, trials, y_band, noise, floor, sign) for m in sel.stages]
+    frf_meas = [frf_parameters(tr, y) for tr, y in zip(trials, y_band, strict=True)]  # once, for every stage
+    stages = [_stage(m, trials, y_band, noise, floor, sign, frf_meas) for m in sel.stages]
     ranking = [{k: v for k, v in e.items() if k != "model"} for e in sel.rankings[0]] if sel.rankings else []
     results = {
         "verdict": sel.verdict,

@@ -259,7 +259,7 @@ def noise_floor(records, prepared, *, band_hz: float, highpass_hz: float, nperse
         nper = min(nperseg, min(d.size for d in diffs))
         f = signal.welch(diffs[0], fs=fs, nperseg=nper)[0]
         p = np.mean([signal.welch(d, fs=fs, nperseg=nper)[1] for d in diffs], axis=0)
-        white = _difference_floor(records, prepared, band_hz, hp)
+        white = _difference_floor(records, prepared, band_hz, hp, nperseg)
         if white.variance_Nm2 < var:
             # the repeats also differ by the subject's trial-to-trial variability (e.g. its
             # co-contraction level), which a candidate can explain from a covariate
@@ -270,13 +270,12 @@ def noise_floor(records, prepared, *, band_hz: float, highpass_hz: float, nperse
                 source=f"{white.source}; below the repeats' estimate {var:.3g} N·m²",
             )
         return NoiseFloor(variance_Nm2=var, psd=p, f_hz=f, source="repeats")
-    return _difference_floor(records, prepared, band_hz, hp)
+    return _difference_floor(records, prepared, band_hz, hp, nperseg)
 
 
-def _difference_floor(records, prepared, band_hz, hp) -> NoiseFloor:
+def _difference_floor(records, prepared, band_hz, hp, nperseg: int) -> NoiseFloor:
     """Noise floor from second differences of the raw torque (white noise assumed)."""
     fs = prepared[0].fs_hz
-    nperseg = 512
     raw_fs = prepared[0].raw_fs_hz
 
     # robust scale of the second differences (1.4826·MAD): the signal's own second differences

@@ -117,18 +117,14 @@ def residual_tests(trials, residuals, *, max_lag_s: float = 0.25, min_lag_s: flo
     ccf = np.zeros(lags.size)
     n_total = 0
     for tr, r in zip(trials, residuals, strict=True):
-        held = tr.held
-        e = r[held] - r[held].mean()
-        u = tr.v[held] - tr.v[held].mean()
+        e = r[tr.held] - r[tr.held].mean()
+        u = tr.v[tr.held] - tr.v[tr.held].mean()
         n = e.size
         n_total += n
-        se, su = np.sqrt(np.sum(e * e)), np.sqrt(np.sum(u * u))
-        for i, k in enumerate(lags):
-            if k >= 0:
-                acf[i] += np.sum(e[k:] * e[: n - k]) / se**2 * n
-                ccf[i] += np.sum(e[k:] * u[: n - k]) / (se * su) * n
-            else:
-                ccf[i] += np.sum(e[: n + k] * u[-k:]) / (se * su) * n
+        # full correlations: entry n-1+k is sum_t e[t]·z[t-k]
+        idx = n - 1 + lags
+        acf += signal.correlate(e, e, method="fft")[idx] / np.sum(e * e) * n
+        ccf += signal.correlate(e, u, method="fft")[idx] / np.sqrt(np.sum(e * e) * np.sum(u * u)) * n
     acf /= n_total
     ccf /= n_total
     bound = 1.96 / np.sqrt(n_total)

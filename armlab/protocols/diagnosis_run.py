@@ -9,7 +9,6 @@ Nothing already written is overwritten: an existing non-empty output folder is a
 
 from __future__ import annotations
 
-import json
 import time
 from datetime import datetime
 from pathlib import Path
@@ -19,7 +18,7 @@ import numpy as np
 from armlab.config.diagnosis import DIAGNOSIS_PROTOCOLS, DiagnosisConfig, RefereeConfig
 from armlab.config.store import apply_overrides
 from armlab.errors import ConfigError, DataError
-from armlab.protocols._files import json_default, write_json, write_new
+from armlab.protocols._files import write_json, write_new
 
 __all__ = [
     "default_diagnosis_dir",
@@ -93,13 +92,13 @@ def _one_case(cls: str, rep: int, ref: RefereeConfig, diag_cfg: DiagnosisConfig,
 
     folder = root / "datasets" / f"{cls.replace(':', '-').replace('+', '-')}_{rep:02d}"
     ds = make_dataset(cls, rep, ref, diag_cfg, folder / "trials")
-    (folder / "truth.json").write_text(json.dumps(ds.truth, indent=2, default=json_default))
+    write_json(folder / "truth.json", ds.truth)
     excluded = list(JOINT_CLASSES[cls][1])
     cfg = apply_overrides(diag_cfg, "diagnosis", [f"diagnosis.exclude=[{','.join(excluded)}]"])
     t0 = time.perf_counter()
     results, _ = run_diagnoser(folder / "trials", ref.protocol, cfg)
     seconds = time.perf_counter() - t0
-    (folder / "results.json").write_text(json.dumps(results, indent=2, default=json_default))
+    write_json(folder / "results.json", results)
     score = score_case(cls, results)
     return {**score, "replicate": rep, "enr": ds.enr, "seconds": seconds, "truth": ds.truth}
 
