@@ -44,6 +44,7 @@ def _usage() -> str:
         "                                                  impedance/admittance fits of real 1-DoF joint\n"
         "                                                  recordings (t_s,position_rad,torque_Nm CSV)\n"
         "  diagnose data=<file|folder> protocol=<name> [diagnosis.<field>=<value>] [out=<dir>]\n"
+        "  diagnose data=published protocol=conditioning_window|virtual_force_sensor [out=<dir>]\n"
         "                                                  where the sim-to-real gap lies, which effect\n"
         "                                                  explains it, how far it shrinks\n"
         "  effects [protocol=<name>]                       list the catalogue of unmodelled effects\n"
@@ -227,8 +228,33 @@ def _diagnose(args: list[str]) -> int:
     if missing:
         return _fail(f"diagnose needs {missing}: armlab diagnose data=<file|folder> protocol=<name>")
     out = Path(named["out"]) if named.get("out") else default_diagnosis_dir()
+    if named["data"] == "published":  # the source paper's published figures as the measurement
+        return _diagnose_published(named["protocol"], rest, out)
     out, results = run_diagnosis(Path(named["data"]), named["protocol"], rest, out)
     print(format_summary(results))
+    print(f"outputs: {out}")
+    return 0
+
+
+def _diagnose_published(protocol: str, overrides: list[str], out: Path) -> int:
+    """``data=published``: the paper's thresholds (conditioning) or Table III pattern (VFS)."""
+    valid = ("conditioning_window", "virtual_force_sensor")
+    if protocol not in valid:
+        return _fail(f"data=published is available for protocols {list(valid)}, not {protocol!r}")
+    if overrides:
+        return _fail(f"data=published takes no diagnosis.* settings; got {overrides}")
+    cfg = compose([f"protocol={protocol}"])[1]
+    out.mkdir(parents=True, exist_ok=True)
+    if protocol == "conditioning_window":
+        from armlab.diagnosis.published_conditioning import run_published_conditioning
+
+        results = run_published_conditioning(cfg, out)
+    else:
+        from armlab.diagnosis.published_vfs import run_published_vfs
+
+        results = run_published_vfs(cfg, out)
+    verdict = results.get("verdict")
+    print(verdict.get("text", verdict) if isinstance(verdict, dict) else verdict)
     print(f"outputs: {out}")
     return 0
 
@@ -246,7 +272,12 @@ def _effects(args: list[str]) -> int:
         from armlab.diagnosis.joint_models import JOINT_SURROGATES
 
         print(f"candidates of `armlab diagnose protocol=joint_1dof`: {', '.join(JOINT_SURROGATES)}")
-        print("(the others can be simulated but leave no gap this protocol can score)\n")
+    if protocol is None or protocol == "conditioning_window":
+        from armlab.diagnosis.cond_models import COND_SURROGATES
+
+        print(f"candidates of `armlab diagnose protocol=conditioning_window`: {', '.join(COND_SURROGATES)}")
+    if protocol in (None, "joint_1dof", "conditioning_window"):
+        print("(the others can be simulated but leave no gap these protocols can score)\n")
     for name in names:
         cls = EFFECTS[name]
         params = ", ".join(f"{k}={v:g}" for k, v in cls().params().items())

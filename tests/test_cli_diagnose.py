@@ -91,8 +91,9 @@ def trial_folder(tmp_path):
         ),
         (["estimator.x=1"], "unknown argument 'estimator.x=1'"),
         (
-            ["data={data}", "protocol=conditioning_window"],
-            "diagnosis of protocol 'conditioning_window' is not available; choose one of ['joint_1dof']",
+            ["data={data}", "protocol=fractional_elbow"],
+            "diagnosis of protocol 'fractional_elbow' is not available; choose one of "
+            "['joint_1dof', 'conditioning_window']",
         ),
         (
             ["data={data}/missing", "protocol=joint_1dof"],
@@ -138,8 +139,14 @@ def test_diagnose_argument_errors(args, message, trial_folder, tmp_path, capsys)
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        (["referee.protocol=x"], "referee protocol 'x' is not available; choose one of ['joint_1dof']"),
-        (["referee.classes=[nope]"], "unknown referee classes ['nope']; valid: ['none', 'reflex', "),
+        (
+            ["referee.protocol=x"],
+            "referee protocol 'x' is not available; choose one of ['joint_1dof', 'conditioning_window']",
+        ),
+        (
+            ["referee.classes=[nope]"],
+            "unknown referee classes ['nope'] for joint_1dof; valid: ['none', 'reflex', ",
+        ),
         (["referee.replicates=0"], "referee.replicates >= 1 and n_trials >= 2"),
         (["diagnosis.max_effects=5"], "diagnosis.max_effects must be 1, 2 or 3, got 5"),
         (

@@ -56,8 +56,8 @@ def test_bad_diagnosis_settings_are_refused(kw, message):
     ("kw", "message"),
     [
         (
-            {"protocol": "conditioning_window"},
-            "referee protocol 'conditioning_window' is not available; choose",
+            {"protocol": "fractional_elbow"},
+            "referee protocol 'fractional_elbow' is not available; choose",
         ),
         ({"replicates": 0}, "referee.replicates >= 1 and n_trials >= 2"),
         ({"n_trials": 1}, "referee.replicates >= 1 and n_trials >= 2"),

@@ -16,7 +16,7 @@ __all__ = [
 ]
 
 #: Protocols ``armlab diagnose`` knows how to simulate and score.
-DIAGNOSIS_PROTOCOLS = ("joint_1dof",)
+DIAGNOSIS_PROTOCOLS = ("joint_1dof", "conditioning_window")
 
 
 def _check(cond: bool, msg: str) -> None:
@@ -72,6 +72,10 @@ class RefereeConfig:
     trial_s: float = 30.0  # s per trial
     fs_hz: float = 1000.0  # Hz, recorded rate
     noise_std_Nm: float = 0.15  # N·m, torque sensor noise (JR3/ATI class at the ankle)
+    # conditioning_window: trials of the k = 26 window (T_k = 300 ms) in 6 directions, and the
+    # white noise of the wrist F/T force (N, several JR3 counts of 0.0122 N, see sensors/presets)
+    cond_trials: int = 30
+    force_noise_N: float = 0.3
     enr_range: tuple[float, float] = (0.5, 4.0)  # effect-to-noise ratio, log-uniform
     classes: list[str] | None = None  # None: every class of the protocol
     jobs: int = 2  # datasets diagnosed in parallel (joblib)
@@ -85,6 +89,8 @@ class RefereeConfig:
         lo, hi = self.enr_range
         _check(0 < lo <= hi, f"referee.enr_range must satisfy 0 < lo <= hi, got {self.enr_range}")
         _check(self.noise_std_Nm > 0, "referee.noise_std_Nm must be > 0")
+        _check(self.force_noise_N > 0, "referee.force_noise_N must be > 0")
+        _check(self.cond_trials >= 6, "referee.cond_trials must be >= 6 (one per perturbation direction)")
 
 
 def register_diagnosis_configs() -> None:

@@ -159,7 +159,7 @@ class JointFriction(Effect):
         "Olsson et al. 1998 (Eur. J. Control 4:176) friction models; capstan rig 0.05 N·m "
         "(virtual-force-sensor paper Table VI)"
     )
-    PROTOCOLS: ClassVar[tuple[str, ...]] = (_JOINT, _VFS, _FRAC)
+    PROTOCOLS: ClassVar[tuple[str, ...]] = (_JOINT, _COND, _VFS, _FRAC)
     coulomb_Nm: float = 0.3  # N·m
     stribeck_Nm: float = 0.0  # N·m, extra static friction near zero velocity
     stribeck_velocity_rad_s: float = 0.05  # rad/s
@@ -216,6 +216,10 @@ class AccelMisalignment(Effect):
     PHYSICS: ClassVar[str] = "accelerometer axes rotated in the plane relative to the handle frame"
     SOURCE: ClassVar[str] = "mounting tolerance ~1-3 deg (ADXL203 datasheet: axis alignment ±1 deg)"
     PROTOCOLS: ClassVar[tuple[str, ...]] = (_COND, _VFS)
+    CONFUSABLE: ClassVar[dict[str, str]] = {
+        "arm stiffness": "the same perturbations at a second posture or with the plane rotated (the "
+        "gravity gradient changes with posture, the muscles' stiffness does not follow it)"
+    }
     SIGNED: ClassVar[tuple[str, ...]] = ("angle_deg",)
     angle_deg: float = 2.0  # deg
 
@@ -250,7 +254,10 @@ class PayloadMass(Effect):
     PHYSICS: ClassVar[str] = "an unmodelled handle/pedal/payload mass beyond the force sensor"
     SOURCE: ClassVar[str] = "handles 0.1-0.5 kg (virtual-force-sensor paper: 135 g handle)"
     PROTOCOLS: ClassVar[tuple[str, ...]] = (_JOINT, _COND, _VFS, _FRAC)
-    CONFUSABLE: ClassVar[dict[str, str]] = {"limb inertia": "empty-handle trials (no subject attached)"}
+    CONFUSABLE: ClassVar[dict[str, str]] = {
+        "limb inertia": "empty-handle trials (no subject attached)",
+        "arm inertia": "empty-handle trials (no subject attached)",
+    }
     mass_kg: float = 0.2  # kg
     lever_m: float = 0.1  # m, distance from the joint axis (1-DoF protocols)
 
@@ -291,6 +298,10 @@ class PlaneTilt(Effect):
     PHYSICS: ClassVar[str] = "the movement plane tilted from horizontal: a component of gravity acts in it"
     SOURCE: ClassVar[str] = "table and robot base levelling tolerance ~0.5-2 deg"
     PROTOCOLS: ClassVar[tuple[str, ...]] = (_COND, _VFS)
+    CONFUSABLE: ClassVar[dict[str, str]] = {
+        "arm stiffness": "the same perturbations at a second posture or with the plane rotated (the "
+        "gravity gradient changes with posture, the muscles' stiffness does not follow it)"
+    }
     SIGNED: ClassVar[tuple[str, ...]] = ("angle_deg",)
     angle_deg: float = 1.0  # deg
     azimuth_deg: float = 0.0  # deg, direction of the downhill slope in the plane
@@ -304,6 +315,9 @@ class TorsoTranslation(Effect):
         "trunk compliance 2-10 kN/m when strapped (Perreault et al. 2004 J. Neurophysiol.)"
     )
     PROTOCOLS: ClassVar[tuple[str, ...]] = (_COND, _VFS)
+    CONFUSABLE: ClassVar[dict[str, str]] = {
+        "cuff_compliance": "a marker or accelerometer on the shoulder (acromion) beside the robot encoders"
+    }
     stiffness_N_per_m: float = 5000.0  # N/m
     damping_Ns_per_m: float = 100.0  # N·s/m
     mass_kg: float = 10.0  # kg, trunk mass moving with the shoulder

@@ -11,8 +11,9 @@ Scores (all on the held-out parts, in the scoring band):
 
 A candidate is accepted when ``delta_bic < -bic_margin``, its reduction is at least
 ``min_step_fraction`` of the nominal excess and ``min_floor_fraction`` of the floor; the first one
-must also explain ``min_first_explained`` of the nominal excess. Nothing accepted: ``none`` when
-the nominal excess is within ``none_tolerance`` of the floor, else ``unknown``.
+must also explain ``min_first_explained`` of the nominal excess. Nothing is accepted while the
+nominal excess is within ``none_tolerance`` of the floor (verdict ``none``: the candidates are
+still ranked for the report); nothing accepted beyond it: ``unknown``.
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ import numpy as np
 
 from armlab.config.diagnosis import DiagnosisConfig
 from armlab.config.effects import EFFECTS
-from armlab.diagnosis.joint_models import FittedModel, Surrogate, fit_model
+from armlab.diagnosis.joint_models import FittedModel, ModelFamily, Surrogate, fit_model
 
 __all__ = [
     "Selection",
@@ -77,6 +78,7 @@ def select_effects(
     rules: DiagnosisConfig,
     *,
     band_share: float,
+    family: ModelFamily | None = None,
 ) -> Selection:
     """Greedy selection of up to ``rules.max_effects`` effects (see the module docstring).
 
@@ -89,8 +91,9 @@ def select_effects(
             ``min_step_fraction``, ``min_floor_fraction``, ``min_first_explained``,
             ``none_tolerance``, ``indistinct_ratio``).
         band_share: (band width) / (Nyquist frequency) of the scoring band, for ``n_eff``.
+        family: the protocol's model family (default: the 1-DoF joint's).
     """
-    nominal = fit_model(trials, y_band, (), hp)
+    nominal = fit_model(trials, y_band, (), hp, family=family)
     stages = [nominal]
     gap0, _, _ = held_out_gap(nominal, trials, y_band)
     excess0 = max(gap0 - floor, 0.0)
@@ -111,7 +114,13 @@ def select_effects(
                 entries.append(_entry(name, gap_c, gap_c, 0.0, 0, excess0, None, identifiable=False))
                 continue
             fm = fit_model(
-                trials, y_band, (*selected, sur), hp, theta0=current.theta, nominal_beta=nominal.beta
+                trials,
+                y_band,
+                (*selected, sur),
+                hp,
+                theta0=current.theta,
+                nominal_beta=nominal.beta,
+                family=family,
             )
             gap, rss, _ = held_out_gap(fm, trials, y_band)
             dp = fm.n_params - current.n_params
@@ -124,7 +133,8 @@ def select_effects(
             break
         reduction = gap_c - best["held_out_gap"]
         ok = (
-            best["delta_bic"] < -rules.bic_margin
+            excess0 > rules.none_tolerance * floor  # a nominal within tolerance of the floor needs nothing
+            and best["delta_bic"] < -rules.bic_margin
             and reduction >= rules.min_step_fraction * excess0
             and reduction >= rules.min_floor_fraction * floor
             and (step > 0 or reduction >= rules.min_first_explained * excess0)
@@ -152,9 +162,9 @@ def select_effects(
         if sur.kind == "absorbed":
             indistinct.append(
                 {
-                    "effects": [name, "limb inertia"],
+                    "effects": [name, sur.absorbed_by],
                     "reductions": [0.0, 0.0],
-                    "separating_trial": _separating_trial(name, "limb inertia"),
+                    "separating_trial": _separating_trial(name, sur.absorbed_by),
                 }
             )
     return Selection(verdict=verdict, stages=stages, rankings=rankings, floor=floor, indistinct=indistinct)

@@ -87,12 +87,21 @@ def _pct(x) -> str:
 
 def format_benchmark(summary: dict, ref) -> str:
     """The benchmark as Markdown (``benchmark.md``)."""
+    if ref.protocol == "conditioning_window":
+        data = (
+            f"{ref.cond_trials} quintic trials of T_k = 300 ms in six directions at 1000 Hz; "
+            f"F/T force noise {ref.force_noise_N:g} N"
+        )
+    else:
+        data = (
+            f"{ref.n_trials} trials × {ref.trial_s:g} s at {ref.fs_hz:g} Hz; "
+            f"torque noise {ref.noise_std_Nm:g} N·m"
+        )
     lines = [
         f"# Diagnosis benchmark — protocol `{ref.protocol}`",
         "",
         f"{summary['n_classes']} classes × {ref.replicates} replicates = {summary['n_cases']} datasets "
-        f"(evaluation seed {ref.seed}; {ref.n_trials} trials × {ref.trial_s:g} s at {ref.fs_hz:g} Hz; "
-        f"torque noise {ref.noise_std_Nm:g} N·m). Wall time {summary.get('timing_s', 0):.0f} s, "
+        f"(evaluation seed {ref.seed}; {data}). Wall time {summary.get('timing_s', 0):.0f} s, "
         f"median diagnosis {summary.get('median_diagnosis_s', 0):.1f} s.",
         "",
         "| figure | measured | target | met |",

@@ -22,6 +22,7 @@ from a grid and are refined by ``scipy.optimize.least_squares`` on the concentra
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -30,11 +31,14 @@ from scipy import optimize, signal
 from armlab.diagnosis.joint_data import PreparedTrial
 
 __all__ = [
+    "JOINT_FAMILY",
     "JOINT_SURROGATES",
     "FittedModel",
+    "ModelFamily",
     "NLParam",
     "Surrogate",
     "fit_model",
+    "shift_columns",
 ]
 
 
@@ -58,6 +62,23 @@ class Surrogate:
     kind: str  # "additive" | "intrinsic" | "output" | "absorbed"
     params: tuple[NLParam, ...] = ()
     linear: tuple[str, ...] = ()  # names of the linear parameters it adds (per trial)
+    absorbed_by: str = "limb inertia"  # kind "absorbed": the nominal parameter that takes it up
+
+
+@dataclass(frozen=True)
+class ModelFamily:
+    """How a protocol composes surrogates into a regressor.
+
+    Attributes:
+        columns: ``(trial, model, theta) -> (n, k)`` regressor of one scoring set.
+        linear_names: ``model -> names`` of the ``k`` linear parameters.
+        start: optional ``(theta, surrogate_name, nominal_beta) -> None`` that seeds the
+            nonlinear parameters of an intrinsic surrogate from the nominal fit.
+    """
+
+    columns: Callable
+    linear_names: Callable
+    start: Callable | None = None
 
 
 def _lp2(z: np.ndarray, fc: float, zeta: float, fs: float) -> np.ndarray:
@@ -66,7 +87,7 @@ def _lp2(z: np.ndarray, fc: float, zeta: float, fs: float) -> np.ndarray:
     return signal.lfilter(b, a, z, axis=0)
 
 
-def _shift(t: np.ndarray, z: np.ndarray, delay: float) -> np.ndarray:
+def shift_columns(t: np.ndarray, z: np.ndarray, delay: float) -> np.ndarray:
     """z(t - delay), held at its first value before the start (columns along axis 0).
 
     Holding (not zeroing) matches a recorded channel: before the trial it read its resting value;
@@ -130,7 +151,7 @@ def _columns(tr: PreparedTrial, model: tuple[Surrogate, ...], theta: dict[str, f
     if "reflex" in names:
         d = theta["reflex.delay_s"]
         s = theta["reflex.direction"]
-        stretch = np.maximum(s * _shift(tr.t_s, tr.v, d), 0.0)
+        stretch = np.maximum(s * shift_columns(tr.t_s, tr.v, d), 0.0)
         cols.append(s * _lp2(stretch, theta["reflex.cutoff_hz"], 0.7, tr.fs_hz))
     if "joint_friction" in names:
         cols.append(
@@ -147,7 +168,7 @@ def _columns(tr: PreparedTrial, model: tuple[Surrogate, ...], theta: dict[str, f
         cols += [tr.m * tr.x, tr.m * tr.v]
     phi = np.stack(cols, axis=1)
     if "channel_delay" in names:
-        phi = _shift(tr.t_s, phi, theta["channel_delay.delay_s"])
+        phi = shift_columns(tr.t_s, phi, theta["channel_delay.delay_s"])
     if "force_sensor_bandwidth" in names:
         b, a = signal.butter(2, theta["force_sensor_bandwidth.cutoff_hz"], fs=tr.fs_hz)
         phi = signal.lfilter(b, a, phi - phi[0], axis=0) + phi[0]
@@ -245,20 +266,38 @@ def _linear_names(model: tuple[Surrogate, ...]) -> tuple[str, ...]:
     return tuple(base)
 
 
+def _lstsq(a: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Least squares by column-scaled normal equations (15x faster than SVD on tall regressors).
+
+    Squaring the condition number is harmless while the scaled Gram matrix stays well
+    conditioned; beyond ``1e10`` the SVD solver takes over.
+    """
+    scale = np.linalg.norm(a, axis=0)
+    scale[scale == 0] = 1.0
+    b = a / scale
+    gram = b.T @ b
+    if np.linalg.cond(gram) > 1e10:
+        return np.linalg.lstsq(a, y, rcond=None)[0]
+    return np.linalg.solve(gram, b.T @ y) / scale
+
+
 class _Problem:
     """Concentrated (variable-projection) residual of a composed model over the training parts."""
 
-    def __init__(self, trials, y_band, model, hp):
-        self.trials, self.y_band, self.model, self.hp = trials, y_band, model, hp
+    def __init__(self, trials, y_band, model, hp, family):
+        self.trials, self.y_band, self.model, self.hp, self.family = trials, y_band, model, hp, family
 
     def design(self, theta):
-        return [signal.sosfiltfilt(self.hp, _columns(tr, self.model, theta), axis=0) for tr in self.trials]
+        cols = [self.family.columns(tr, self.model, theta) for tr in self.trials]
+        if self.hp is None:
+            return cols
+        return [signal.sosfiltfilt(self.hp, c, axis=0) for c in cols]
 
     def solve(self, theta):
         phis = self.design(theta)
         betas, res = [], []
         for tr, y, phi in zip(self.trials, self.y_band, phis, strict=True):
-            beta = np.linalg.lstsq(phi[tr.train], y[tr.train], rcond=None)[0]
+            beta = _lstsq(phi[tr.train], y[tr.train])
             betas.append(beta)
             res.append(y - phi @ beta)
         return phis, betas, res
@@ -276,6 +315,10 @@ def _start_compliance(theta, name, base_beta):
     theta.setdefault(f"{name}.tau1_s", float(np.clip(abs(b / k), 2e-4, 0.1)))
 
 
+#: The 1-DoF joint protocol's model family.
+JOINT_FAMILY = ModelFamily(columns=_columns, linear_names=_linear_names, start=_start_compliance)
+
+
 def fit_model(
     trials: tuple[PreparedTrial, ...],
     y_band: list[np.ndarray],
@@ -284,6 +327,7 @@ def fit_model(
     *,
     theta0: dict[str, float] | None = None,
     nominal_beta: tuple[np.ndarray, ...] | None = None,
+    family: ModelFamily | None = None,
 ) -> FittedModel:
     """Fit a composed model: grid over the parameters not in ``theta0``, then a joint refinement.
 
@@ -294,12 +338,15 @@ def fit_model(
         hp: second-order sections of the scoring high-pass.
         theta0: nonlinear parameters already fitted (kept as the start of the refinement).
         nominal_beta: the nominal fit's linear parameters (start of compliance time constants).
+        family: the protocol's model family (default: the 1-DoF joint's); ``hp`` None scores
+            the columns unfiltered.
     """
+    family = JOINT_FAMILY if family is None else family
     theta = dict(theta0 or {})
     for s in model:
-        if s.kind == "intrinsic" and nominal_beta is not None:
-            _start_compliance(theta, s.name, nominal_beta)
-    prob = _Problem(trials, y_band, model, hp)
+        if s.kind == "intrinsic" and nominal_beta is not None and family.start is not None:
+            family.start(theta, s.name, nominal_beta)
+    prob = _Problem(trials, y_band, model, hp, family)
     todo = [(f"{s.name}.{p.name}", p) for s in model for p in s.params if f"{s.name}.{p.name}" not in theta]
     gridded = [(k, p) for k, p in todo if p.grid]
     for k, p in todo:
@@ -325,7 +372,7 @@ def fit_model(
         effects=tuple(s.name for s in model),
         theta=theta,
         beta=tuple(betas),
-        linear_names=_linear_names(model),
+        linear_names=family.linear_names(model),
         predictions=tuple(y - r for y, r in zip(y_band, res, strict=True)),
         residuals=tuple(res),
         n_params=n_lin * len(trials) + len(free),
@@ -350,6 +397,20 @@ def _refine(prob: _Problem, theta: dict, free: list[str], params: dict[str, NLPa
         return prob.train_residual({**theta, **{k: from_u(k, x) for k, x in zip(free, u, strict=True)}})
 
     cost0 = float(np.sum(resid(u0) ** 2))
+    if len(free) == 1:
+        # one parameter: a bounded scalar search on the concentrated cost (a few dozen solves,
+        # where the trust-region solver spends most of its evaluations on finite differences)
+        step = (hi[0] - lo[0]) / max(len(params[free[0]].grid), 4)
+        a, b = max(lo[0], u0[0] - step), min(hi[0], u0[0] + step)
+        sol1 = optimize.minimize_scalar(
+            lambda x: float(np.sum(resid(np.array([x])) ** 2)),
+            bounds=(a, b),
+            method="bounded",
+            options={"xatol": 1e-4 * (hi[0] - lo[0]), "maxiter": 40},
+        )
+        if sol1.fun <= cost0:
+            return {**theta, free[0]: from_u(free[0], float(sol1.x))}
+        return theta
     sol = optimize.least_squares(resid, u0, bounds=(lo, hi), x_scale="jac", diff_step=1e-3, max_nfev=60)
     cand = {**theta, **{k: from_u(k, x) for k, x in zip(free, sol.x, strict=True)}}
     return cand if np.sum(sol.fun**2) <= cost0 else theta

@@ -172,9 +172,12 @@ def make_dataset(
     return Dataset(cls=cls, replicate=replicate, folder=folder, truth=truth, enr=effect_rms / noise_rms)
 
 
-def score_case(cls: str, results: dict) -> dict:
-    """Top-1, top-2 and full-verdict correctness of one diagnosis, and its held-out shrink."""
-    expected = expected_verdict(cls)
+def score_case(cls: str, results: dict, expected: set[str] | None = None) -> dict:
+    """Top-1, top-2 and full-verdict correctness of one diagnosis, and its held-out shrink.
+
+    ``expected``: the right verdict as a set of names (default: the joint_1dof class's).
+    """
+    expected = expected_verdict(cls) if expected is None else expected
     verdict = list(results["verdict"])
     ranking = [e["name"] for e in results["ranking"]]
     top1 = verdict[0] in expected

@@ -457,7 +457,8 @@ def format_summary(results: Mapping[str, Any]) -> str:
     """A few lines for the terminal: the verdict, VAF nominal → final, the floor, the top candidates."""
     per = results.get("per_trial")
     if per is None:
-        n = len(results.get("trials") or [])
+        trials = results.get("trials") or []
+        n = trials["n"] if isinstance(trials, dict) else len(trials)
         lines = [f"diagnosis ({n} trials pooled): verdict {' -> '.join(results['verdict'])}"]
         lines += _summary_lines(results, "  ")
     else:

@@ -52,10 +52,17 @@ def _check_protocol(protocol: str) -> None:
 
 def run_diagnoser(data: Path, protocol: str, cfg: DiagnosisConfig) -> tuple[dict, dict]:
     """Diagnose the trial files at ``data`` (no output files): (results, series)."""
+    _check_protocol(protocol)
+    if protocol == "conditioning_window":
+        from armlab.diagnosis.cond_data import load_cond_trials
+        from armlab.diagnosis.cond_diagnose import diagnose_cond
+
+        results, series = diagnose_cond(load_cond_trials(Path(data)), cfg)
+        results["data"] = str(data)
+        return results, series
     from armlab.data.joint_import import load_joint_data
     from armlab.diagnosis.diagnose import diagnose_joint
 
-    _check_protocol(protocol)
     records = load_joint_data(Path(data), min_duration_s=cfg.min_duration_s)
     results, series = diagnose_joint(records, cfg)
     results["data"] = str(data)
@@ -77,29 +84,53 @@ def run_diagnosis(
     results["timing_s"] = {"diagnosis": time.perf_counter() - t0}
     out = _new_dir(out_dir)
     names: list[str] = []
-    if figures:
+    cond = protocol == "conditioning_window"
+    if figures and cond:
+        from armlab.viz.cond_diagnosis import cond_diagnosis_figures, cond_diagnosis_recording
+
+        names = [p.name for p in cond_diagnosis_figures(series, results, out)]
+        cond_diagnosis_recording(series, out / "diagnosis.rrd")
+    elif figures:
         from armlab.viz.diagnosis import diagnosis_figures, diagnosis_recording
 
         names = [p.name for p in diagnosis_figures(series, results, out)]
         diagnosis_recording(series, out / "diagnosis.rrd")
     write_json(out / "results.json", results)
-    write_new(out / "report.md", format_report(results, data_path=str(data), figures=names))
+    if cond:
+        from armlab.diagnosis.cond_report import format_cond_report
+
+        report = format_cond_report(results, data_path=str(data), figures=names)
+    else:
+        report = format_report(results, data_path=str(data), figures=names)
+    write_new(out / "report.md", report)
     return out, results
 
 
-def _one_case(cls: str, rep: int, ref: RefereeConfig, diag_cfg: DiagnosisConfig, root: Path) -> dict:
-    from armlab.diagnosis.referee import JOINT_CLASSES, make_dataset, score_case
+def _referee(protocol: str):
+    """(classes, dataset maker, expected verdict) of a protocol's referee."""
+    if protocol == "conditioning_window":
+        from armlab.diagnosis.cond_referee import COND_CLASSES, cond_expected_verdict, make_cond_dataset
 
+        return COND_CLASSES, make_cond_dataset, cond_expected_verdict
+    from armlab.diagnosis.referee import JOINT_CLASSES, expected_verdict, make_dataset
+
+    return JOINT_CLASSES, make_dataset, expected_verdict
+
+
+def _one_case(cls: str, rep: int, ref: RefereeConfig, diag_cfg: DiagnosisConfig, root: Path) -> dict:
+    from armlab.diagnosis.referee import score_case
+
+    classes, make, expected = _referee(ref.protocol)
     folder = root / "datasets" / f"{cls.replace(':', '-').replace('+', '-')}_{rep:02d}"
-    ds = make_dataset(cls, rep, ref, diag_cfg, folder / "trials")
+    ds = make(cls, rep, ref, diag_cfg, folder / "trials")
     write_json(folder / "truth.json", ds.truth)
-    excluded = list(JOINT_CLASSES[cls][1])
+    excluded = list(classes[cls][1])
     cfg = apply_overrides(diag_cfg, "diagnosis", [f"diagnosis.exclude=[{','.join(excluded)}]"])
     t0 = time.perf_counter()
     results, _ = run_diagnoser(folder / "trials", ref.protocol, cfg)
     seconds = time.perf_counter() - t0
     write_json(folder / "results.json", results)
-    score = score_case(cls, results)
+    score = score_case(cls, results, expected(cls))
     return {**score, "replicate": rep, "enr": ds.enr, "seconds": seconds, "truth": ds.truth}
 
 
@@ -108,7 +139,6 @@ def run_benchmark(overrides: list[str] | None, out_dir: Path) -> tuple[Path, dic
     from joblib import Parallel, delayed
 
     from armlab.diagnosis.benchmark_summary import format_benchmark, summarise
-    from armlab.diagnosis.referee import JOINT_CLASSES
 
     ref_items = [o for o in overrides or [] if o.startswith("referee.")]
     diag_items = [o for o in overrides or [] if o.startswith("diagnosis.")]
@@ -119,10 +149,11 @@ def run_benchmark(overrides: list[str] | None, out_dir: Path) -> tuple[Path, dic
         )
     ref = apply_overrides(RefereeConfig(), "referee", ref_items)
     diag_cfg = apply_overrides(DiagnosisConfig(), "diagnosis", diag_items)
-    classes = list(ref.classes) if ref.classes is not None else list(JOINT_CLASSES)
-    unknown = [c for c in classes if c not in JOINT_CLASSES]
+    all_classes = _referee(ref.protocol)[0]
+    classes = list(ref.classes) if ref.classes is not None else list(all_classes)
+    unknown = [c for c in classes if c not in all_classes]
     if unknown:
-        raise ConfigError(f"unknown referee classes {unknown}; valid: {list(JOINT_CLASSES)}")
+        raise ConfigError(f"unknown referee classes {unknown} for {ref.protocol}; valid: {list(all_classes)}")
     out = _new_dir(out_dir)
     t0 = time.perf_counter()
     cases = Parallel(n_jobs=ref.jobs)(

@@ -158,11 +158,15 @@ def _run(cfg: ExperimentConfig, out_dir: Path, config_yaml: str, timing: dict) -
     from armlab import viz  # the only place figures and recordings are made
 
     simulate, outputs = _RUNS[cfg.protocol_name]
-    on = list(enabled_effects(cfg.effects))
+    from armlab.sim.lab import LAB_EFFECTS
+
+    applied = LAB_EFFECTS if cfg.protocol_name == "conditioning_window" else ()
+    on = [n for n in enabled_effects(cfg.effects) if n not in applied]
     if on:  # never silently ignore a switched-on effect
         raise ConfigError(
-            f"effects {on} are not simulated by protocol {cfg.protocol_name!r} yet; they are applied by the "
-            "joint_1dof simulation (armlab.sim.joint_1dof, used by `armlab diagnose-benchmark`)"
+            f"effects {on} are not simulated by protocol {cfg.protocol_name!r} yet; it applies "
+            f"{list(applied)}; the joint_1dof simulation (armlab.sim.joint_1dof, used by "
+            "`armlab diagnose-benchmark`) applies the catalogue"
         )
     t0 = time.perf_counter()
     sim = simulate(cfg)

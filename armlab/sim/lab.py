@@ -10,8 +10,10 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy import signal
 from scipy.interpolate import CubicSpline
 
+from armlab.config.effects import EffectsConfig, enabled_effects
 from armlab.config.schema import ExperimentConfig
 from armlab.data.trial import TrialSet
 from armlab.errors import ConfigError
@@ -26,6 +28,7 @@ from armlab.sim.robot_ik import solve_ik
 from armlab.sim.rollout import simulate
 
 __all__ = [
+    "LAB_EFFECTS",
     "LabRecording",
     "PATH_POINTS",
     "record_trials",
@@ -33,6 +36,40 @@ __all__ = [
 ]
 
 PATH_POINTS = 41  # IK points along each direction's hand path (spline-interpolated in between)
+#: Catalogue effects (configs/effects/) this laboratory applies; the reflex and the cuff
+#: compliance are its own ``reflex.*`` and ``cuff.*`` settings.
+LAB_EFFECTS = ("joint_friction", "force_sensor_bandwidth", "channel_delay", "force_sensor_noise")
+
+
+def _apply_model_effects(scene: Scene, effects: EffectsConfig) -> None:
+    """Coulomb friction (MuJoCo ``frictionloss``, N·m) at the shoulder and elbow."""
+    if effects.joint_friction is not None:
+        scene.model.dof_frictionloss[scene.arm_dof] = effects.joint_friction.coulomb_Nm
+
+
+def _force_effects(z: np.ndarray, effects: EffectsConfig, fs: float) -> np.ndarray:
+    """(n_trials, n, k) clean F/T channel through the sensor-level effects.
+
+    ``force_sensor_bandwidth``: causal 2nd-order Butterworth, started at rest at the first sample;
+    ``channel_delay``: the force channel lags by round(delay·fs) whole samples (first value held;
+    a negative delay is not supported here).
+    """
+    if effects.force_sensor_bandwidth is not None:
+        fc = effects.force_sensor_bandwidth.cutoff_hz
+        if not 0 < fc < fs / 2:
+            raise ConfigError(f"effects.force_sensor_bandwidth.cutoff_hz={fc} must lie in (0, {fs / 2}) Hz")
+        b, a = signal.butter(2, fc, fs=fs)
+        z = signal.lfilter(b, a, z - z[:, :1], axis=1) + z[:, :1]
+    if effects.channel_delay is not None:
+        d = int(round(effects.channel_delay.delay_s * fs))
+        if d < 0:
+            raise ConfigError(
+                f"effects.channel_delay.delay_s={effects.channel_delay.delay_s} s: the laboratory delays the "
+                "force channel only; valid: >= 0"
+            )
+        if d:
+            z = np.concatenate([np.repeat(z[:, :1], d, axis=1), z[:, :-d]], axis=1)
+    return z
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -90,7 +127,14 @@ def record_trials(
         plan: the concrete trials.
         rng: generator for the sensor noise (the plan was drawn before).
     """
+    other = [n for n in enabled_effects(cfg.effects) if n not in LAB_EFFECTS]
+    if other:
+        raise ConfigError(
+            f"effects {other} are not simulated by the {cfg.protocol_name} laboratory; it applies "
+            f"{list(LAB_EFFECTS)} (reflex and cuff compliance are its reflex.* and cuff.* settings)"
+        )
     scene = build_scene(cfg.arm, cfg.cuff, cfg.robot, cfg.sim)
+    _apply_model_effects(scene, cfg.effects)
     hold = settle(scene, cfg.arm, cfg.sim.settle_s)
     truth = ground_truth(scene, hold.state, cfg.cuff.rigid)
 
@@ -114,12 +158,16 @@ def record_trials(
     clean = {
         "robot_q": np.concatenate([scene.sensor(sd, f"lwr_q{i}") for i in range(1, 8)], axis=-1),
         "robot_tau": np.concatenate([scene.sensor(sd, f"lwr_tau{i}") for i in range(1, 8)], axis=-1),
-        "ft_force": scene.sensor(sd, "ft_force"),
-        "ft_torque": scene.sensor(sd, "ft_torque"),
+        "ft_force": _force_effects(scene.sensor(sd, "ft_force"), cfg.effects, fs),
+        "ft_torque": _force_effects(scene.sensor(sd, "ft_torque"), cfg.effects, fs),
     }
     suite = SensorSuite.realistic() if cfg.sensors.preset == "realistic" else SensorSuite.ideal()
     # drift accumulates from taring, before the random wait
     measured = measure(clean, suite, fs, rng, t0_s=plan.wait_s)
+    if cfg.effects.force_sensor_noise is not None:  # extra white noise, N, after the sensor suite
+        measured["ft_force"] = measured["ft_force"] + rng.normal(
+            0.0, cfg.effects.force_sensor_noise.std, measured["ft_force"].shape
+        )
     fk = RobotKinematics.from_scene(scene)
     contact, ft_rot = fk.forward(measured["robot_q"])
     hand_pos = (contact - scene.shoulder_pos)[..., :2]

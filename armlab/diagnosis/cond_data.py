@@ -1,0 +1,222 @@
+"""Measured trials of the conditioning-window protocol, prepared for the diagnosis.
+
+Input is an armlab trial file (``trials.h5``, docs/trial_format.md) or the run folder holding
+one: channels ``hand_pos`` (m) and ``hand_force`` (N, on the hand, shoulder frame), attrs
+``arm_l1_m`` / ``arm_l2_m`` and every trial's ``onset_index``; the trial_meta ``group`` and
+``direction`` are used where present (repeats of one perturbation). The joint-space signals are
+those of the paper's processing (Sec. IV-C: inverse kinematics, zero-phase low-pass, central
+differences, ``tau_ext = J^T F``, baselines over the pre-onset span), low-passed at the
+diagnosis band instead of the estimator's 20 Hz.
+
+Scoring rows are the samples 0-400 ms after each onset (the longest window of the issue's
+breakdown), both joints. Whole trials are held out: the last of every three repeats of a
+(group, direction) cell, or every third trial without metadata. The noise floor is the variance
+of the band-limited torque over the pre-onset hold (no perturbation, no reflex: only sensor
+noise and tremor), per joint.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+
+from armlab.errors import DataError
+from armlab.estimation.processing import ProcessingConfig, differentiate, joint_signals
+from armlab.models.planar_arm import jacobian
+
+__all__ = [
+    "CHANNELS",
+    "WINDOW_S",
+    "CondSet",
+    "load_cond_trials",
+    "prepare_cond",
+    "with_compliance_basis",
+]
+
+CHANNELS = ("shoulder", "elbow")
+WINDOW_S = 0.4  # s, end of the last window of the issue's breakdown (250-400 ms)
+_BASELINE_S = 0.2  # s, pre-onset span of the baselines (conditioning paper Sec. IV-C)
+_EDGE_S = 0.05  # s, start of record left out of the noise estimate (filter start-up)
+_REQUIRED = ("hand_pos", "hand_force")
+
+
+@dataclass(frozen=True, eq=False)
+class CondSet:
+    """All trials of one dataset as one scoring set (the joint model is shared by the trials).
+
+    Attributes:
+        fs_hz: Hz.
+        onset: sample of the perturbation onset (common to all trials).
+        n_window: samples scored after the onset.
+        q, qd, qdd, dq, dtau: (m, n, 2) full-record joint signals (rad, rad/s, rad/s², rad, N·m).
+        u, ud, udd: (m, n, 2) ``J⁻¹·ΔF`` and its derivatives (the joint displacement a 1 m/N
+            series compliance adds under the force change ΔF). ``ΔF`` is the measured force
+            low-passed well below the band (:func:`with_compliance_basis`): a regressor built
+            from the band-limited measured force would carry the output's own noise and
+            "explain" it.
+        l1, l2: m, segment lengths.
+        direction, group: (m,) int perturbation labels (-1 where unknown).
+        train, held: bool masks over the flattened scoring rows (trial, sample, joint).
+        noise_var: (2,) N·m², per joint, band-limited noise variance.
+        names: (m,) trial labels.
+    """
+
+    fs_hz: float
+    onset: int
+    n_window: int
+    q: np.ndarray
+    qd: np.ndarray
+    qdd: np.ndarray
+    dq: np.ndarray
+    dtau: np.ndarray
+    u: np.ndarray
+    ud: np.ndarray
+    udd: np.ndarray
+    direction: np.ndarray
+    group: np.ndarray
+    train: np.ndarray
+    held: np.ndarray
+    held_trials: np.ndarray
+    noise_var: np.ndarray
+    names: tuple[str, ...]
+    l1: float
+    l2: float
+
+    @property
+    def n_trials(self) -> int:
+        return self.q.shape[0]
+
+    def rows(self, z: np.ndarray) -> np.ndarray:
+        """(m, n, 2, ...) full-record array -> (m·n_window·2, ...) scoring rows."""
+        w = z[:, self.onset : self.onset + self.n_window]
+        return w.reshape(-1, *z.shape[3:])
+
+    @property
+    def y(self) -> np.ndarray:
+        """Measured torque change on the scoring rows, N·m."""
+        return self.rows(self.dtau)
+
+    @property
+    def row_channel(self) -> np.ndarray:
+        return np.tile(np.arange(2), self.n_trials * self.n_window)
+
+    @property
+    def row_time_s(self) -> np.ndarray:
+        return np.tile(np.repeat(np.arange(self.n_window) / self.fs_hz, 2), self.n_trials)
+
+    @property
+    def row_trial(self) -> np.ndarray:
+        return np.repeat(np.arange(self.n_trials), 2 * self.n_window)
+
+
+def load_cond_trials(path: Path):
+    """Read a conditioning-window trial file (or the run folder that holds ``trials.h5``)."""
+    from armlab.data.h5io import read_trials
+
+    path = Path(path)
+    if path.is_dir():
+        files = sorted(path.glob("*.h5"))
+        if len(files) != 1:
+            raise DataError(
+                f"{path} holds {len(files)} .h5 files; give the trial file itself or a run folder "
+                "with exactly one (trials.h5)"
+            )
+        path = files[0]
+    if path.suffix != ".h5":
+        raise DataError(
+            f"{path.name}: the conditioning_window diagnosis reads armlab trial files (.h5, "
+            "docs/trial_format.md); valid: a trials.h5 file or its run folder"
+        )
+    trials = read_trials(path)
+    missing = [c for c in _REQUIRED if c not in trials.channels]
+    if missing:
+        raise DataError(f"{path.name} lacks channel(s) {missing}; have {sorted(trials.channels)}")
+    for key in ("arm_l1_m", "arm_l2_m"):
+        if key not in trials.attrs:
+            raise DataError(
+                f"{path.name} lacks attr {key!r} (segment length, m); have {sorted(trials.attrs)}"
+            )
+    return trials
+
+
+def _holdout(direction: np.ndarray, group: np.ndarray, holdout_fraction: float) -> np.ndarray:
+    every = max(2, int(round(1.0 / holdout_fraction)))
+    held = np.zeros(direction.size, bool)
+    for key in set(zip(group.tolist(), direction.tolist(), strict=True)):
+        idx = np.flatnonzero((group == key[0]) & (direction == key[1]))
+        held[idx[every - 1 :: every]] = True
+    if not held.any():  # fewer than `every` repeats per cell: every `every`-th trial overall
+        held[every - 1 :: every] = True
+    if held.all() or not held.any():
+        raise DataError(
+            f"{direction.size} trial(s) cannot be split into training and held-out trials; need >= 2"
+        )
+    return held
+
+
+def prepare_cond(trials, *, band_hz: float, holdout_fraction: float) -> CondSet:
+    """Joint-space signals, scoring rows, hold-out split and noise floor of a trial set."""
+    fs = float(trials.fs_hz)
+    onset = np.asarray(trials.onset_index)
+    if np.any(onset != onset[0]):
+        raise DataError(f"trials have different onset samples ({np.unique(onset)}); the diagnosis needs one")
+    on = int(onset[0])
+    n_window = int(round(WINDOW_S * fs))
+    if trials.n_samples - on < n_window:
+        raise DataError(
+            f"trials end {(trials.n_samples - on) / fs:.3f} s after onset; the diagnosis windows need "
+            f"{WINDOW_S} s (0-20 ... 250-400 ms)"
+        )
+    n_base = int(round(_BASELINE_S * fs))
+    if on - int(round(_EDGE_S * fs)) < n_base // 2:
+        raise DataError(
+            f"trials start {on / fs:.3f} s before onset; the baseline and noise floor need >= 0.15 s"
+        )
+    if not 0 < band_hz < fs / 2:
+        raise DataError(f"diagnosis.band_hz={band_hz} must lie in (0, {fs / 2}) Hz (Nyquist)")
+    l1, l2 = float(trials.attrs["arm_l1_m"]), float(trials.attrs["arm_l2_m"])
+    proc = ProcessingConfig(lowpass_hz=band_hz, filter_order=4, baseline_s=_BASELINE_S)
+    force = trials.channel("hand_force")
+    sig = joint_signals(trials.channel("hand_pos"), force, fs, onset, l1, l2, proc)
+    zero = np.zeros_like(sig.q)
+    meta = trials.trial_meta
+    m = trials.n_trials
+    direction = np.asarray(meta.get("direction", np.full(m, -1)), int)
+    group = np.asarray(meta.get("group", np.full(m, -1)), int)
+    held_trials = _holdout(direction, group, holdout_fraction)
+    row_trial = np.repeat(np.arange(m), 2 * n_window)
+    edge = int(round(_EDGE_S * fs))
+    noise_var = np.var(sig.dtau[:, edge:on], axis=1).mean(axis=0)
+    return CondSet(
+        fs_hz=fs,
+        onset=on,
+        n_window=n_window,
+        q=sig.q,
+        qd=sig.qd,
+        qdd=sig.qdd,
+        dq=sig.dq,
+        dtau=sig.dtau,
+        u=zero,
+        ud=zero,
+        udd=zero,
+        direction=direction,
+        group=group,
+        train=~held_trials[row_trial],
+        held=held_trials[row_trial],
+        held_trials=held_trials,
+        noise_var=noise_var,
+        names=tuple(f"trial {i}" for i in range(m)),
+        l1=l1,
+        l2=l2,
+    )
+
+
+def with_compliance_basis(cs: CondSet, dtau_model: np.ndarray) -> CondSet:
+    """``cs`` with ``u = J⁻¹ J⁻ᵀ Δτ`` from a (m, n, 2) joint-torque change, N·m."""
+    jac = jacobian(cs.q, cs.l1, cs.l2)
+    force = np.linalg.solve(np.swapaxes(jac, -1, -2), dtau_model[..., None])
+    u = np.linalg.solve(jac, force)[..., 0]
+    ud, udd = differentiate(u, cs.fs_hz, axis=1)
+    return replace(cs, u=u, ud=ud, udd=udd)
