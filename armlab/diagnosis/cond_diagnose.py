@@ -16,9 +16,9 @@ from armlab.config.diagnosis import DiagnosisConfig
 from armlab.diagnosis.attribution import held_out_gap, select_effects
 from armlab.diagnosis.cond_data import CHANNELS, CondSet, prepare_cond, with_compliance_basis
 from armlab.diagnosis.cond_models import COND_FAMILY, COND_SURROGATES
+from armlab.diagnosis.diagnose import candidate_names
 from armlab.diagnosis.joint_models import FittedModel
 from armlab.diagnosis.localise import BANDS_HZ, WINDOWS_MS
-from armlab.errors import ConfigError
 from armlab.estimation.joint_ls import PARAM_NAMES, regressor
 from armlab.estimation.processing import lowpass_zero_phase
 
@@ -38,15 +38,7 @@ BIAS_WINDOWS_S = (0.12, 0.2, 0.3, 0.4)
 
 def cond_candidates(cfg: DiagnosisConfig) -> list[str]:
     """The candidate list after ``candidates`` / ``exclude`` (unknown names raise ConfigError)."""
-    valid = list(COND_SURROGATES)
-    chosen = list(cfg.candidates) if cfg.candidates is not None else valid
-    for name in [*chosen, *cfg.exclude]:
-        if name not in valid:
-            raise ConfigError(f"unknown candidate effect {name!r} for conditioning_window; valid: {valid}")
-    out = [n for n in chosen if n not in cfg.exclude]
-    if not out:
-        raise ConfigError(f"no candidate effects left after exclude={cfg.exclude}; valid: {valid}")
-    return out
+    return candidate_names(cfg, COND_SURROGATES, "conditioning_window")
 
 
 def _gap(resid: np.ndarray, y: np.ndarray, noise: np.ndarray, mask: np.ndarray) -> dict:

@@ -26,13 +26,16 @@ __all__ = [
 ]
 
 
-def candidate_names(cfg: DiagnosisConfig) -> list[str]:
-    """The candidate list after ``candidates`` / ``exclude`` (unknown names raise ConfigError)."""
-    valid = list(JOINT_SURROGATES)
+def candidate_names(cfg: DiagnosisConfig, surrogates=None, protocol: str = "joint_1dof") -> list[str]:
+    """The candidate list after ``candidates`` / ``exclude`` (unknown names raise ConfigError).
+
+    ``surrogates``: the protocol's candidates by name (default: the joint_1dof ones).
+    """
+    valid = list(JOINT_SURROGATES if surrogates is None else surrogates)
     chosen = list(cfg.candidates) if cfg.candidates is not None else valid
     for name in [*chosen, *cfg.exclude]:
         if name not in valid:
-            raise ConfigError(f"unknown candidate effect {name!r} for joint_1dof; valid: {valid}")
+            raise ConfigError(f"unknown candidate effect {name!r} for {protocol}; valid: {valid}")
     out = [n for n in chosen if n not in cfg.exclude]
     if not out:
         raise ConfigError(f"no candidate effects left after exclude={cfg.exclude}; valid: {valid}")
