@@ -216,10 +216,6 @@ class AccelMisalignment(Effect):
     PHYSICS: ClassVar[str] = "accelerometer axes rotated in the plane relative to the handle frame"
     SOURCE: ClassVar[str] = "mounting tolerance ~1-3 deg (ADXL203 datasheet: axis alignment ±1 deg)"
     PROTOCOLS: ClassVar[tuple[str, ...]] = (_COND, _VFS)
-    CONFUSABLE: ClassVar[dict[str, str]] = {
-        "arm stiffness": "the same perturbations at a second posture or with the plane rotated (the "
-        "gravity gradient changes with posture, the muscles' stiffness does not follow it)"
-    }
     SIGNED: ClassVar[tuple[str, ...]] = ("angle_deg",)
     angle_deg: float = 2.0  # deg
 
