@@ -244,7 +244,6 @@ def _diagnose_published(protocol: str, overrides: list[str], out: Path) -> int:
     if overrides:
         return _fail(f"data=published takes no diagnosis.* settings; got {overrides}")
     cfg = compose([f"protocol={protocol}"])[1]
-    out.mkdir(parents=True, exist_ok=True)
     if protocol == "conditioning_window":
         from armlab.diagnosis.published_conditioning import run_published_conditioning
 

@@ -15,13 +15,12 @@ import pytest
 from armlab.config.diagnosis import DiagnosisConfig, RefereeConfig
 from armlab.config.effects import EFFECTS
 from armlab.config.schema import ExperimentConfig
-from armlab.diagnosis.cond_data import prepare_cond, with_compliance_basis
+from armlab.diagnosis.cond_data import prepare_cond
 from armlab.diagnosis.cond_diagnose import cond_candidates, diagnose_cond
 from armlab.diagnosis.cond_models import COND_FAMILY, COND_SURROGATES, cond_columns
 from armlab.diagnosis.cond_referee import COND_CLASSES, cond_expected_verdict, make_cond_dataset
 from armlab.diagnosis.joint_models import fit_model
 from armlab.errors import ConfigError, DataError
-from armlab.estimation.processing import lowpass_zero_phase
 from armlab.protocols.conditioning_window import simulate_protocol
 
 NOISE_N = 0.3  # N, white F/T force noise of the referee (RefereeConfig.force_noise_N)
@@ -101,7 +100,6 @@ def test_cuff_compliance_is_found_with_its_stiffness(cuff_trials):
 
 def test_compliance_basis_from_measured_force_does_not_explain_noise(nominal_trials):
     cs = prepare_cond(nominal_trials, band_hz=40.0, holdout_fraction=1 / 3)
-    cs = with_compliance_basis(cs, lowpass_zero_phase(cs.dtau, cs.fs_hz, 15.0, 4, axis=1))
     fm0 = fit_model((cs,), [cs.y], (), None, family=COND_FAMILY)
     fm1 = fit_model((cs,), [cs.y], (COND_SURROGATES["cuff_compliance"],), None, family=COND_FAMILY)
     held = cs.held

@@ -17,25 +17,30 @@ noise and tremor), per joint.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
+from functools import cached_property
 from pathlib import Path
 
 import numpy as np
 
 from armlab.errors import DataError
-from armlab.estimation.processing import ProcessingConfig, differentiate, joint_signals
+from armlab.estimation.joint_ls import regressor
+from armlab.estimation.processing import ProcessingConfig, differentiate, joint_signals, lowpass_zero_phase
 from armlab.models.planar_arm import jacobian
 
 __all__ = [
     "CHANNELS",
+    "COMPLIANCE_BASIS_HZ",
     "WINDOW_S",
     "CondSet",
     "load_cond_trials",
     "prepare_cond",
-    "with_compliance_basis",
 ]
 
 CHANNELS = ("shoulder", "elbow")
+#: Hz, low-pass of the measured torque from which the series-compliance basis is built: well
+#: below the band, so the regressor carries little of the output's own noise (CondSet.u).
+COMPLIANCE_BASIS_HZ = 15.0
 WINDOW_S = 0.4  # s, end of the last window of the issue's breakdown (250-400 ms)
 _BASELINE_S = 0.2  # s, pre-onset span of the baselines (conditioning paper Sec. IV-C)
 _EDGE_S = 0.05  # s, start of record left out of the noise estimate (filter start-up)
@@ -52,13 +57,13 @@ class CondSet:
         n_window: samples scored after the onset.
         q, qd, qdd, dq, dtau: (m, n, 2) full-record joint signals (rad, rad/s, rad/s², rad, N·m).
         u, ud, udd: (m, n, 2) ``J⁻¹·ΔF`` and its derivatives (the joint displacement a 1 m/N
-            series compliance adds under the force change ΔF). ``ΔF`` is the measured force
-            low-passed well below the band (:func:`with_compliance_basis`): a regressor built
-            from the band-limited measured force would carry the output's own noise and
-            "explain" it.
+            series compliance adds under the force change ΔF). ``ΔF = J⁻ᵀΔτ`` with Δτ the
+            measured torque low-passed at :data:`COMPLIANCE_BASIS_HZ`, well below the band: a
+            regressor built from the band-limited measured force would carry the output's own
+            noise and "explain" it (a test guards this).
         l1, l2: m, segment lengths.
         direction, group: (m,) int perturbation labels (-1 where unknown).
-        train, held: bool masks over the flattened scoring rows (trial, sample, joint).
+        held_trials: (m,) bool, the held-out trials.
         noise_var: (2,) N·m², per joint, band-limited noise variance.
         names: (m,) trial labels.
     """
@@ -76,8 +81,6 @@ class CondSet:
     udd: np.ndarray
     direction: np.ndarray
     group: np.ndarray
-    train: np.ndarray
-    held: np.ndarray
     held_trials: np.ndarray
     noise_var: np.ndarray
     names: tuple[str, ...]
@@ -109,6 +112,20 @@ class CondSet:
     @property
     def row_trial(self) -> np.ndarray:
         return np.repeat(np.arange(self.n_trials), 2 * self.n_window)
+
+    @property
+    def held(self) -> np.ndarray:
+        """Bool mask of the held-out scoring rows (trial, sample, joint flattened)."""
+        return self.held_trials[self.row_trial]
+
+    @property
+    def train(self) -> np.ndarray:
+        return ~self.held
+
+    @cached_property
+    def nominal_columns(self) -> np.ndarray:
+        """(m, n, 2, 11) regressor of Eq. (9) over the full records (computed once)."""
+        return regressor(self.q, self.qd, self.qdd, self.dq)
 
 
 def load_cond_trials(path: Path):
@@ -178,15 +195,17 @@ def prepare_cond(trials, *, band_hz: float, holdout_fraction: float) -> CondSet:
         raise DataError(f"diagnosis.band_hz={band_hz} must lie in (0, {fs / 2}) Hz (Nyquist)")
     l1, l2 = float(trials.attrs["arm_l1_m"]), float(trials.attrs["arm_l2_m"])
     proc = ProcessingConfig(lowpass_hz=band_hz, filter_order=4, baseline_s=_BASELINE_S)
-    force = trials.channel("hand_force")
-    sig = joint_signals(trials.channel("hand_pos"), force, fs, onset, l1, l2, proc)
-    zero = np.zeros_like(sig.q)
+    sig = joint_signals(trials.channel("hand_pos"), trials.channel("hand_force"), fs, onset, l1, l2, proc)
+    # the series-compliance basis u = J⁻¹ J⁻ᵀ Δτ (see CondSet.u)
+    jac = jacobian(sig.q, l1, l2)
+    dtau_slow = lowpass_zero_phase(sig.dtau, fs, COMPLIANCE_BASIS_HZ, 4, axis=1)
+    u = np.linalg.solve(jac, np.linalg.solve(np.swapaxes(jac, -1, -2), dtau_slow[..., None]))[..., 0]
+    ud, udd = differentiate(u, fs, axis=1)
     meta = trials.trial_meta
     m = trials.n_trials
     direction = np.asarray(meta.get("direction", np.full(m, -1)), int)
     group = np.asarray(meta.get("group", np.full(m, -1)), int)
     held_trials = _holdout(direction, group, holdout_fraction)
-    row_trial = np.repeat(np.arange(m), 2 * n_window)
     edge = int(round(_EDGE_S * fs))
     noise_var = np.var(sig.dtau[:, edge:on], axis=1).mean(axis=0)
     return CondSet(
@@ -198,25 +217,14 @@ def prepare_cond(trials, *, band_hz: float, holdout_fraction: float) -> CondSet:
         qdd=sig.qdd,
         dq=sig.dq,
         dtau=sig.dtau,
-        u=zero,
-        ud=zero,
-        udd=zero,
+        u=u,
+        ud=ud,
+        udd=udd,
         direction=direction,
         group=group,
-        train=~held_trials[row_trial],
-        held=held_trials[row_trial],
         held_trials=held_trials,
         noise_var=noise_var,
         names=tuple(f"trial {i}" for i in range(m)),
         l1=l1,
         l2=l2,
     )
-
-
-def with_compliance_basis(cs: CondSet, dtau_model: np.ndarray) -> CondSet:
-    """``cs`` with ``u = J⁻¹ J⁻ᵀ Δτ`` from a (m, n, 2) joint-torque change, N·m."""
-    jac = jacobian(cs.q, cs.l1, cs.l2)
-    force = np.linalg.solve(np.swapaxes(jac, -1, -2), dtau_model[..., None])
-    u = np.linalg.solve(jac, force)[..., 0]
-    ud, udd = differentiate(u, cs.fs_hz, axis=1)
-    return replace(cs, u=u, ud=ud, udd=udd)

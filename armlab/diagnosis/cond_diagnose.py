@@ -14,24 +14,19 @@ import numpy as np
 
 from armlab.config.diagnosis import DiagnosisConfig
 from armlab.diagnosis.attribution import held_out_gap, select_effects
-from armlab.diagnosis.cond_data import CHANNELS, CondSet, prepare_cond, with_compliance_basis
+from armlab.diagnosis.cond_data import CHANNELS, CondSet, prepare_cond
 from armlab.diagnosis.cond_models import COND_FAMILY, COND_SURROGATES
 from armlab.diagnosis.diagnose import candidate_names
 from armlab.diagnosis.joint_models import FittedModel
 from armlab.diagnosis.localise import BANDS_HZ, WINDOWS_MS
-from armlab.estimation.joint_ls import PARAM_NAMES, regressor
-from armlab.estimation.processing import lowpass_zero_phase
+from armlab.estimation.joint_ls import PARAM_NAMES
 
 __all__ = [
     "BIAS_WINDOWS_S",
-    "COMPLIANCE_BASIS_HZ",
     "cond_candidates",
     "diagnose_cond",
 ]
 
-#: Hz, low-pass of the measured torque from which the series-compliance basis is built: well
-#: below the band, so the regressor carries little of the output's own noise (CondSet.u).
-COMPLIANCE_BASIS_HZ = 15.0
 #: s, observation windows of the parameter-bias check (paper's T_obs range 110-370 ms, and 400).
 BIAS_WINDOWS_S = (0.12, 0.2, 0.3, 0.4)
 
@@ -117,7 +112,7 @@ def _residual_tests(cs: CondSet, resid: np.ndarray, max_lag_s: float = 0.1) -> d
 
 def _identify(cs: CondSet, target_rows: np.ndarray) -> list[dict]:
     """The 11-parameter least squares on the training trials over each bias window."""
-    x = cs.rows(regressor(cs.q, cs.qd, cs.qdd, cs.dq))
+    x = cs.rows(cs.nominal_columns)
     out = []
     for t_obs in BIAS_WINDOWS_S:
         mask = cs.train & (cs.row_time_s < t_obs - 0.5 / cs.fs_hz)
@@ -160,7 +155,6 @@ def diagnose_cond(trials, cfg: DiagnosisConfig) -> tuple[dict, dict]:
     cs = prepare_cond(trials, band_hz=cfg.band_hz, holdout_fraction=cfg.holdout_fraction)
     y = cs.y
     names = cond_candidates(cfg)
-    cs = with_compliance_basis(cs, lowpass_zero_phase(cs.dtau, cs.fs_hz, COMPLIANCE_BASIS_HZ, 4, axis=1))
     floor = float(np.sum(cs.noise_var[cs.row_channel][cs.held])) / float(np.sum(y[cs.held] ** 2))
     sel = select_effects(
         (cs,),
@@ -198,11 +192,8 @@ def diagnose_cond(trials, cfg: DiagnosisConfig) -> tuple[dict, dict]:
         },
         "how_far": stages,
         "indistinct": sel.indistinct,
-        "trials": {
-            "n": cs.n_trials,
-            "held_out": int(cs.held_trials.sum()),
-            "window_s": cs.n_window / cs.fs_hz,
-        },
+        "trials": list(cs.names),
+        "scoring": {"held_out_trials": int(cs.held_trials.sum()), "window_s": cs.n_window / cs.fs_hz},
     }
     series = {
         "set": cs,

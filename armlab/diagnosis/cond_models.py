@@ -27,7 +27,7 @@ import numpy as np
 from scipy import signal
 
 from armlab.diagnosis.cond_data import CondSet
-from armlab.diagnosis.joint_models import ModelFamily, NLParam, Surrogate, shift_columns
+from armlab.diagnosis.joint_models import ModelFamily, NLParam, Surrogate, lowpass2, shift_columns
 from armlab.estimation.joint_ls import PARAM_NAMES, regressor
 from armlab.estimation.processing import differentiate
 
@@ -42,12 +42,6 @@ def _delayed(cs: CondSet, z: np.ndarray, delay_s: float) -> np.ndarray:
     t = np.arange(z.shape[1]) / cs.fs_hz
     moved = np.moveaxis(z, 1, 0).reshape(z.shape[1], -1)
     return np.moveaxis(shift_columns(t, moved, delay_s).reshape(z.shape[1], z.shape[0], *z.shape[2:]), 0, 1)
-
-
-def _activation_filter(fc: float, fs: float):
-    """2nd-order critically damped low-pass: excitation-to-force dynamics of a muscle."""
-    w = 2 * np.pi * fc
-    return signal.bilinear([w * w], [1.0, 2 * w, w * w], fs)
 
 
 def _sym_columns(a: np.ndarray) -> np.ndarray:
@@ -73,18 +67,17 @@ def _spring_damper(cs: CondSet, tau_s: float) -> tuple[np.ndarray, np.ndarray, n
 def cond_columns(cs: CondSet, model: tuple[Surrogate, ...], theta: dict[str, float]) -> np.ndarray:
     """(rows, k) regressor of the composed model on the scoring rows of ``cs``."""
     names = [s.name for s in model]
-    q, qd, qdd, dq = cs.q, cs.qd, cs.qdd, cs.dq
-    blocks = []
     if "cuff_compliance" in names:
         c = theta["cuff_compliance.compliance_m_per_N"]
         u, ud, udd = _spring_damper(cs, theta["cuff_compliance.time_constant_s"])
-        q, qd, qdd, dq = q - c * u, qd - c * ud, qdd - c * udd, dq - c * u
-    blocks.insert(0, regressor(q, qd, qdd, dq))
+        blocks = [regressor(cs.q - c * u, cs.qd - c * ud, cs.qdd - c * udd, cs.dq - c * u)]
+    else:
+        blocks = [cs.nominal_columns]
     if "reflex" in names:
         d = theta["reflex.delay_s"]
-        b, a = _activation_filter(theta["reflex.cutoff_hz"], cs.fs_hz)
-        for z in (cs.dq, cs.qd):
-            blocks.append(_sym_columns(signal.lfilter(b, a, _delayed(cs, z, d), axis=1)))
+        fc = theta["reflex.cutoff_hz"]
+        for z in (cs.dq, cs.qd):  # through a critically damped excitation-to-force low-pass
+            blocks.append(_sym_columns(lowpass2(_delayed(cs, z, d), fc, 1.0, cs.fs_hz, axis=1)))
     if "joint_friction" in names:
         v0 = theta["joint_friction.velocity_rad_s"]
         fr = np.zeros((*cs.qd.shape, 2))

@@ -181,12 +181,13 @@ def _how_far(r: Mapping[str, Any]) -> list[str]:
 def format_cond_report(results: Mapping[str, Any], *, data_path: str, figures: Sequence[str] = ()) -> str:
     """The Markdown report of a conditioning-window diagnosis (see docs/diagnosis_schema.md)."""
     r = results
-    trials = r.get("trials", {})
+    scoring = r.get("scoring", {})
     lines = [
         "# Sim-to-real diagnosis — protocol `conditioning_window`",
         "",
-        f"Data: `{data_path}` — {trials.get('n', '?')} trials, {trials.get('held_out', '?')} held out, "
-        f"scored 0–{1e3 * float(trials.get('window_s', 0.4)):.0f} ms after each onset, both joints. "
+        f"Data: `{data_path}` — {len(r.get('trials') or [])} trials, "
+        f"{scoring.get('held_out_trials', '?')} held out, scored "
+        f"0–{1e3 * float(scoring.get('window_s', 0.4)):.0f} ms after each onset, both joints. "
         "Nominal simulation: the linearised arm of Eq. (9) (inertia xi, damping D, stiffness K; 11 "
         "parameters) calibrated on the training trials. Gap = held-out residual power / measured "
         "power (1 − VAF); noise floor = the same ratio for the pre-onset sensor noise "

@@ -38,6 +38,7 @@ __all__ = [
     "NLParam",
     "Surrogate",
     "fit_model",
+    "lowpass2",
     "shift_columns",
 ]
 
@@ -81,10 +82,11 @@ class ModelFamily:
     start: Callable | None = None
 
 
-def _lp2(z: np.ndarray, fc: float, zeta: float, fs: float) -> np.ndarray:
+def lowpass2(z: np.ndarray, fc: float, zeta: float, fs: float, axis: int = 0) -> np.ndarray:
+    """Causal 2nd-order low-pass ``w²/(s² + 2ζws + w²)`` (bilinear), started at rest, along ``axis``."""
     w = 2 * np.pi * fc
     b, a = signal.bilinear([w * w], [1.0, 2 * zeta * w, w * w], fs)
-    return signal.lfilter(b, a, z, axis=0)
+    return signal.lfilter(b, a, z, axis=axis)
 
 
 def shift_columns(t: np.ndarray, z: np.ndarray, delay: float) -> np.ndarray:
@@ -152,7 +154,7 @@ def _columns(tr: PreparedTrial, model: tuple[Surrogate, ...], theta: dict[str, f
         d = theta["reflex.delay_s"]
         s = theta["reflex.direction"]
         stretch = np.maximum(s * shift_columns(tr.t_s, tr.v, d), 0.0)
-        cols.append(s * _lp2(stretch, theta["reflex.cutoff_hz"], 0.7, tr.fs_hz))
+        cols.append(s * lowpass2(stretch, theta["reflex.cutoff_hz"], 0.7, tr.fs_hz))
     if "joint_friction" in names:
         cols.append(
             tr.to_fit_rate(

@@ -37,8 +37,8 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from armlab.config.schema import ExperimentConfig
-from armlab.errors import ArmlabError, ConfigError, DataError
-from armlab.protocols._files import write_json, write_new
+from armlab.errors import ArmlabError, ConfigError
+from armlab.protocols._files import new_dir, write_json, write_new
 from armlab.protocols.conditioning_window import (
     PAPER_THRESHOLDS_S,
     estimate_protocol,
@@ -439,16 +439,10 @@ def run_published_conditioning(
     """Run :func:`diagnose_thresholds` and write ``results.json`` and ``report.md`` into ``out_dir``.
 
     Raises:
-        DataError: either file exists already (checked before simulating; nothing is overwritten).
+        DataError: ``out_dir`` is not empty (checked before simulating; nothing is overwritten).
     """
-    out_dir = Path(out_dir)
-    for name in ("results.json", "report.md"):
-        if (out_dir / name).exists():
-            raise DataError(
-                f"{out_dir / name} exists; armlab never overwrites results — use a new run directory"
-            )
+    out_dir = new_dir(out_dir)
     result = diagnose_thresholds(cfg, variants, quick=quick)
-    out_dir.mkdir(parents=True, exist_ok=True)
     write_json(out_dir / "results.json", result)
     write_new(out_dir / "report.md", format_report(result))
     return result

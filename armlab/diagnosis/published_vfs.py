@@ -24,9 +24,9 @@ from scipy import stats
 
 from armlab.config.schema import ExperimentConfig
 from armlab.diagnosis._published_vfs_text import format_report
-from armlab.errors import ConfigError, DataError
+from armlab.errors import ConfigError
 from armlab.models.spring_array import TABLE_I_PAYLOADS_KG, TABLE_I_STIFFNESS
-from armlab.protocols._files import write_json, write_new
+from armlab.protocols._files import new_dir, write_json, write_new
 from armlab.protocols.vfs_results import METHODS, PAPER_TABLE_III, estimate_vfs
 from armlab.protocols.virtual_force_sensor import simulate_vfs
 
@@ -318,13 +318,9 @@ def run_published_vfs(
     """Run :func:`diagnose_pattern` and write ``results.json`` and ``report.md`` into ``out_dir``.
 
     Raises:
-        DataError: either file exists already (checked before simulating; nothing is overwritten).
+        DataError: ``out_dir`` is not empty (checked before simulating; nothing is overwritten).
     """
-    out_dir = Path(out_dir)
-    for name in ("results.json", "report.md"):
-        if (out_dir / name).exists():
-            raise DataError(f"{out_dir / name} exists; armlab never overwrites results — use a new directory")
-    out_dir.mkdir(parents=True, exist_ok=True)
+    out_dir = new_dir(out_dir)
     t0 = time.perf_counter()
     result = diagnose_pattern(cfg, variants, quick=quick)
     result["wall_s"] = time.perf_counter() - t0

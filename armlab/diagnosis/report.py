@@ -457,8 +457,7 @@ def format_summary(results: Mapping[str, Any]) -> str:
     """A few lines for the terminal: the verdict, VAF nominal → final, the floor, the top candidates."""
     per = results.get("per_trial")
     if per is None:
-        trials = results.get("trials") or []
-        n = trials["n"] if isinstance(trials, dict) else len(trials)
+        n = len(results.get("trials") or [])
         lines = [f"diagnosis ({n} trials pooled): verdict {' -> '.join(results['verdict'])}"]
         lines += _summary_lines(results, "  ")
     else:

@@ -9,7 +9,7 @@ import numpy as np
 
 from armlab.errors import DataError
 
-__all__ = ["json_default", "write_json", "write_new"]
+__all__ = ["json_default", "new_dir", "write_json", "write_new"]
 
 
 def json_default(obj):
@@ -19,6 +19,15 @@ def json_default(obj):
     if isinstance(obj, np.generic):
         return obj.item()
     raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
+
+
+def new_dir(out: Path) -> Path:
+    """An output folder that is new or empty (created); a non-empty one is a DataError."""
+    out = Path(out)
+    if out.exists() and any(out.iterdir()):
+        raise DataError(f"{out} exists and is not empty; armlab never overwrites results — choose a new out=")
+    out.mkdir(parents=True, exist_ok=True)
+    return out
 
 
 def write_new(path: Path, text: str) -> Path:

@@ -18,7 +18,7 @@ import numpy as np
 from armlab.config.diagnosis import DIAGNOSIS_PROTOCOLS, DiagnosisConfig, RefereeConfig
 from armlab.config.store import apply_overrides
 from armlab.errors import ConfigError, DataError
-from armlab.protocols._files import write_json, write_new
+from armlab.protocols._files import new_dir, write_json, write_new
 
 __all__ = [
     "default_diagnosis_dir",
@@ -33,14 +33,6 @@ _ROOT = Path(__file__).resolve().parents[2]
 def default_diagnosis_dir(kind: str = "diagnose") -> Path:
     """``outputs/<kind>/<timestamp with microseconds>`` under the repository root."""
     return _ROOT / "outputs" / kind / datetime.now().strftime("%Y-%m-%d_%H-%M-%S-%f")
-
-
-def _new_dir(out: Path) -> Path:
-    out = Path(out)
-    if out.exists() and any(out.iterdir()):
-        raise DataError(f"{out} exists and is not empty; armlab never overwrites results — choose a new out=")
-    out.mkdir(parents=True, exist_ok=True)
-    return out
 
 
 def _check_protocol(protocol: str) -> None:
@@ -82,7 +74,7 @@ def run_diagnosis(
     t0 = time.perf_counter()
     results, series = run_diagnoser(Path(data), protocol, cfg)
     results["timing_s"] = {"diagnosis": time.perf_counter() - t0}
-    out = _new_dir(out_dir)
+    out = new_dir(out_dir)
     names: list[str] = []
     cond = protocol == "conditioning_window"
     if figures and cond:
@@ -154,7 +146,7 @@ def run_benchmark(overrides: list[str] | None, out_dir: Path) -> tuple[Path, dic
     unknown = [c for c in classes if c not in all_classes]
     if unknown:
         raise ConfigError(f"unknown referee classes {unknown} for {ref.protocol}; valid: {list(all_classes)}")
-    out = _new_dir(out_dir)
+    out = new_dir(out_dir)
     t0 = time.perf_counter()
     cases = Parallel(n_jobs=ref.jobs)(
         delayed(_one_case)(c, r, ref, diag_cfg, out) for c in classes for r in range(ref.replicates)

@@ -10,7 +10,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import signal
 from scipy.interpolate import CubicSpline
 
 from armlab.config.effects import EffectsConfig, enabled_effects
@@ -22,6 +21,7 @@ from armlab.models.robot_fk import RobotKinematics
 from armlab.models.scene import MUSCLES, ROBOT_POINTS, Scene, build_scene
 from armlab.perturbations.quintic import quintic_profile
 from armlab.perturbations.scenario import Scenario, TrialPlan
+from armlab.sensors.channel import ChannelSpec, apply_channel
 from armlab.sensors.presets import SensorSuite, measure
 from armlab.sim.hold import HoldState, hand_world, settle
 from armlab.sim.robot_ik import solve_ik
@@ -48,28 +48,21 @@ def _apply_model_effects(scene: Scene, effects: EffectsConfig) -> None:
 
 
 def _force_effects(z: np.ndarray, effects: EffectsConfig, fs: float) -> np.ndarray:
-    """(n_trials, n, k) clean F/T channel through the sensor-level effects.
+    """(n_trials, n, k) clean F/T channel through the sensor-level effects, by the sensor model.
 
-    ``force_sensor_bandwidth``: causal 2nd-order Butterworth, started at rest at the first sample;
-    ``channel_delay``: the force channel lags by round(delay·fs) whole samples (first value held;
-    a negative delay is not supported here).
+    ``force_sensor_bandwidth``: causal 2nd-order Butterworth (steady state at the first sample);
+    ``channel_delay``: the force channel lags by round(delay·fs) whole samples (a negative delay
+    is refused by :class:`ChannelSpec`). Deterministic: the spec has no bias, drift or noise.
     """
-    if effects.force_sensor_bandwidth is not None:
-        fc = effects.force_sensor_bandwidth.cutoff_hz
-        if not 0 < fc < fs / 2:
-            raise ConfigError(f"effects.force_sensor_bandwidth.cutoff_hz={fc} must lie in (0, {fs / 2}) Hz")
-        b, a = signal.butter(2, fc, fs=fs)
-        z = signal.lfilter(b, a, z - z[:, :1], axis=1) + z[:, :1]
-    if effects.channel_delay is not None:
-        d = int(round(effects.channel_delay.delay_s * fs))
-        if d < 0:
-            raise ConfigError(
-                f"effects.channel_delay.delay_s={effects.channel_delay.delay_s} s: the laboratory delays the "
-                "force channel only; valid: >= 0"
-            )
-        if d:
-            z = np.concatenate([np.repeat(z[:, :1], d, axis=1), z[:, :-d]], axis=1)
-    return z
+    bw, delay = effects.force_sensor_bandwidth, effects.channel_delay
+    if bw is None and delay is None:
+        return z
+    spec = ChannelSpec(
+        bandwidth_hz=None if bw is None else bw.cutoff_hz,
+        delay_s=0.0 if delay is None else delay.delay_s,
+    )
+    # no random draw reaches the output (bias, drift and noise are zero): any generator will do
+    return apply_channel(z, fs, spec, np.random.default_rng(0))
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
