@@ -4,8 +4,10 @@ Target (issue 5): one diagnosis with about ten candidates under 60 s on the 2-co
 Times the diagnosis alone (import, preparation, noise floor, every candidate fitted in each
 greedy step, where/how-far breakdowns; no figures) on
 
-- a referee dataset of the joint_1dof protocol (4 trials x 30 s at 1 kHz, a hidden reflex), and
-- the six real REKLAB ankle recordings pooled (5 x 60 s + 106 s at 1 kHz), when present.
+- a referee dataset of the joint_1dof protocol (4 trials x 30 s at 1 kHz, a hidden reflex),
+- the six real REKLAB ankle recordings pooled (5 x 60 s + 106 s at 1 kHz), when present, and
+- a referee dataset of the conditioning_window protocol (30 trials of 0.85 s, window k = 26, a
+  hidden reflex and compliant cuff; 5 identifiable candidates, 2 flagged as absorbed).
 """
 
 from __future__ import annotations
@@ -16,6 +18,8 @@ from pathlib import Path
 
 from armlab.config.diagnosis import DiagnosisConfig, RefereeConfig
 from armlab.data.reklab import DEFAULT_REKLAB_ROOT
+from armlab.diagnosis.cond_models import COND_SURROGATES
+from armlab.diagnosis.cond_referee import make_cond_dataset
 from armlab.diagnosis.diagnose import candidate_names
 from armlab.diagnosis.referee import make_dataset
 from armlab.protocols.diagnosis_run import run_diagnoser
@@ -23,9 +27,9 @@ from armlab.protocols.diagnosis_run import run_diagnoser
 TARGET_S = 60.0  # s, issue 5
 
 
-def _time(folder: Path, cfg: DiagnosisConfig) -> tuple[float, dict]:
+def _time(folder: Path, cfg: DiagnosisConfig, protocol: str = "joint_1dof") -> tuple[float, dict]:
     t0 = time.perf_counter()
-    results, _ = run_diagnoser(folder, "joint_1dof", cfg)
+    results, _ = run_diagnoser(folder, protocol, cfg)
     return time.perf_counter() - t0, results
 
 
@@ -45,6 +49,15 @@ def main() -> None:
             f"diagnose joint_1dof REKLAB ankle folder ({len(res['trials'])} trials, {n_cand} candidates): "
             f"{wall:.1f} s (target < {TARGET_S:.0f} s) verdict {res['verdict']}"
         )
+    ref = RefereeConfig(protocol="conditioning_window")
+    n_cond = len(candidate_names(cfg, COND_SURROGATES, "conditioning_window"))
+    with tempfile.TemporaryDirectory() as tmp:
+        ds = make_cond_dataset("reflex+cuff_compliance", 0, ref, cfg, Path(tmp) / "trials")
+        wall, res = _time(ds.folder / "trials.h5", cfg, "conditioning_window")
+    print(
+        f"diagnose conditioning_window referee dataset ({len(res['trials'])} trials, {n_cond} candidates): "
+        f"{wall:.1f} s (target < {TARGET_S:.0f} s) verdict {res['verdict']}"
+    )
 
 
 if __name__ == "__main__":

@@ -42,7 +42,13 @@ def _select(torque_fn, names, *, seed=0, rules=None):
     )
     cands = {n: JOINT_SURROGATES[n] for n in names}
     return select_effects(
-        trials, y_band, hp, cands, floor, rules or DiagnosisConfig(), band_share=_BAND_SHARE
+        trials,
+        y_band,
+        hp,
+        cands,
+        floor,
+        (rules or DiagnosisConfig()).for_protocol("joint_1dof"),
+        band_share=_BAND_SHARE,
     )
 
 

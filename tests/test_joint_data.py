@@ -79,13 +79,18 @@ def test_band_limits_torque_and_differentiates_position():
     np.testing.assert_allclose(tr.a[mid], -0.02 * w * w * np.sin(w * ts), atol=5e-4 * 0.02 * w * w)
 
 
-def test_slow_torque_has_zero_mean_and_unit_rms():
+def test_slow_torque_has_zero_mean_and_unit_rms_and_follows_the_tonic_level():
     rng = np.random.default_rng(2)
     x = prbs_position(rng, 10.0)
     t = np.arange(x.size) / JOINT_FS_HZ
-    (tr,) = prepare_trials([JointTrial("a", x, nominal_torque(x) + 2.0 * np.sin(0.4 * t))], **_KW)
+    tonic = 2.0 * np.sin(0.4 * t)
+    (tr,) = prepare_trials([JointTrial("a", x, nominal_torque(x) + tonic)], **_KW)
     assert tr.m.mean() == pytest.approx(0.0, abs=1e-12)
     assert np.sqrt(np.mean(tr.m**2)) == pytest.approx(1.0)
+    # the stiffness acting on the perturbation's own slow content is removed: m is the tonic level
+    q = int(round(JOINT_FS_HZ / tr.fs_hz))
+    inner = slice(int(2 * tr.fs_hz), -int(2 * tr.fs_hz))
+    assert np.corrcoef(tr.m[inner], tonic[::q][inner])[0, 1] > 0.95
 
 
 def test_filtered_torque_stays_the_model_of_the_filtered_motion_up_to_the_ends():

@@ -155,9 +155,15 @@ def _own_params(name: str, params: Mapping[str, Any]) -> str:
 # ---------------------------------------------------------------------------------------------
 
 
-def _tolerance(results: Mapping[str, Any], settings: Mapping[str, Any] | None) -> float:
+def _rule(results: Mapping[str, Any], settings: Mapping[str, Any] | None, name: str) -> float:
+    """A selection threshold as the diagnosis used it (older results: the protocol's default)."""
+    from armlab.config.diagnosis import PROTOCOL_RULES
+
     s = settings or results.get("settings") or {}
-    return float(s.get("none_tolerance", 0.25))
+    value = s.get(name)
+    if value is None:
+        value = PROTOCOL_RULES.get(results.get("protocol", "joint_1dof"), PROTOCOL_RULES["joint_1dof"])[name]
+    return float(value)
 
 
 def _verdict_paragraph(r: Mapping[str, Any], settings: Mapping[str, Any] | None) -> str:
@@ -172,8 +178,25 @@ def _verdict_paragraph(r: Mapping[str, Any], settings: Mapping[str, Any] | None)
         return (
             "**Verdict: no gap beyond measurement noise.** The nominal simulation already reaches a "
             f"held-out VAF of {_vaf(nominal)} (gap {_pct(nominal)}) at the {floor_words}: its excess over "
-            f"the floor is within the {100 * _tolerance(r, settings):.0f} % tolerance. No unmodelled effect "
+            f"the floor is within the {100 * _rule(r, settings, 'none_tolerance'):.0f} % tolerance. "
+            "No unmodelled effect "
             "is needed; the candidate ranking below is shown for completeness."
+        )
+    partial = list(r.get("partial") or [])
+    removed = (nominal - final) / excess0 if excess0 > 0 else 0.0
+    if verdict == ["unknown"] and partial:
+        final_words = f"gap {_pct(final)}, {_ratio(final, floor)} the floor"
+        return (
+            f"**Verdict: unknown — the gap is real and the catalogue explains only part of it.** The "
+            f"nominal simulation's held-out VAF is {_vaf(nominal)} (gap {_pct(nominal)}), above the "
+            f"{floor_words}. {_effects_words(partial).capitalize()} passed the acceptance rules but "
+            f"remove{'s' if len(partial) == 1 else ''} only {_part(removed)} "
+            f"of the gap above the floor ({final_words} after them), less than the "
+            f"{_part(_rule(r, settings, 'min_explained'))} the diagnosis asks of an explanation: "
+            f"{'it is' if len(partial) == 1 else 'they are'} probably standing in for an effect that is not "
+            "in the candidate list (a delay or a low-pass also mimics a reflex loop). See *Where* for the "
+            "band and the time after onset that hold the gap, and *How far* for what the partial "
+            "explanation changes."
         )
     if verdict == ["unknown"] or not verdict:
         ranking = r.get("ranking") or []
@@ -192,8 +215,7 @@ def _verdict_paragraph(r: Mapping[str, Any], settings: Mapping[str, Any] | None)
             "for the band and the time after onset that hold the gap: the missing effect is probably not in "
             "the catalogue, or it was left out by `candidates`/`exclude` in the settings."
         )
-    removed = (nominal - final) / excess0 if excess0 > 0 else 0.0
-    if final - floor <= _tolerance(r, settings) * floor:
+    if final - floor <= _rule(r, settings, "none_tolerance") * floor:
         rest = "The corrected model reaches the noise floor: nothing measurable is left unexplained."
     else:
         rest = (

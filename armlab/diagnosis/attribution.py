@@ -13,7 +13,11 @@ A candidate is accepted when ``delta_bic < -bic_margin``, its reduction is at le
 ``min_step_fraction`` of the nominal excess and ``min_floor_fraction`` of the floor; the first one
 must also explain ``min_first_explained`` of the nominal excess. Nothing is accepted while the
 nominal excess is within ``none_tolerance`` of the floor (verdict ``none``: the candidates are
-still ranked for the report); nothing accepted beyond it: ``unknown``.
+still ranked for the report); nothing accepted beyond it: ``unknown``. Accepted effects that
+leave more than ``1 − min_explained`` of the nominal excess, and more than ``none_tolerance`` of
+the floor, are a partial explanation of something else: the verdict is ``unknown`` too, and they
+are kept in ``Selection.partial`` (and the stages) for the report. ``rules`` must have both
+tolerances set (:meth:`DiagnosisConfig.for_protocol`).
 """
 
 from __future__ import annotations
@@ -52,6 +56,7 @@ class Selection:
         rankings: per greedy step, the candidates' entries (best first).
         floor: the noise floor as a gap fraction.
         indistinct: pairs that the data cannot tell apart, with the trial that would.
+        partial: with verdict ``unknown``, the accepted effects that explained too little.
     """
 
     verdict: list[str]
@@ -59,6 +64,7 @@ class Selection:
     rankings: list[list[dict]]
     floor: float
     indistinct: list[dict]
+    partial: list[str]
 
 
 def _separating_trial(a: str, b: str) -> str:
@@ -93,6 +99,8 @@ def select_effects(
         band_share: (band width) / (Nyquist frequency) of the scoring band, for ``n_eff``.
         family: the protocol's model family (default: the 1-DoF joint's).
     """
+    if rules.none_tolerance is None or rules.min_explained is None:
+        raise ValueError("select_effects needs none_tolerance and min_explained set (for_protocol)")
     nominal = fit_model(trials, y_band, (), hp, family=family)
     stages = [nominal]
     gap0, _, _ = held_out_gap(nominal, trials, y_band)
@@ -154,8 +162,12 @@ def select_effects(
         selected.append(candidates[best["name"]])
         current = best["model"]
         stages.append(current)
+    partial: list[str] = []
     if selected:
         verdict = [s.name for s in selected]
+        left = held_out_gap(current, trials, y_band)[0] - floor
+        if left > max(rules.none_tolerance * floor, (1.0 - rules.min_explained) * excess0):
+            partial, verdict = verdict, ["unknown"]
     else:
         verdict = ["none"] if gap0 - floor <= rules.none_tolerance * floor else ["unknown"]
     for name, sur in candidates.items():
@@ -167,7 +179,9 @@ def select_effects(
                     "separating_trial": _separating_trial(name, sur.absorbed_by),
                 }
             )
-    return Selection(verdict=verdict, stages=stages, rankings=rankings, floor=floor, indistinct=indistinct)
+    return Selection(
+        verdict=verdict, stages=stages, rankings=rankings, floor=floor, indistinct=indistinct, partial=partial
+    )
 
 
 def _entry(name, gap_before, gap, dbic, dp, excess0, model, identifiable=True) -> dict:

@@ -63,6 +63,8 @@ def summarise(cases: list[dict]) -> dict:
         "top2": _rate(c["top2"] for c in cases),
         "exact": _rate(c["exact"] for c in cases),
         "top1_enr_ge_1": _rate(c["top1"] for c in strong + none_cases),
+        "top1_enr_ge_1_flagged": _rate(c.get("top1_flagged", c["top1"]) for c in strong + none_cases),
+        "flagged": _rate(c.get("flagged", False) for c in cases),
         "false_alarm_none": _rate(not c["top1"] for c in none_cases),
         "median_shrink": float(np.median(shrink)) if shrink else None,
         "accuracy_vs_enr": by_enr,
@@ -89,7 +91,9 @@ def format_benchmark(summary: dict, ref) -> str:
     """The benchmark as Markdown (``benchmark.md``)."""
     if ref.protocol == "conditioning_window":
         data = (
-            f"{ref.cond_trials} quintic trials of T_k = 300 ms in six directions at 1000 Hz; "
+            f"{ref.cond_trials} quintic trials per window k = {list(ref.cond_windows)} "
+            f"(T_k = {', '.join(f'{40 + 10 * k} ms' for k in ref.cond_windows)}) "
+            "in six directions at 1000 Hz; "
             f"F/T force noise {ref.force_noise_N:g} N"
         )
     else:
@@ -115,6 +119,10 @@ def format_benchmark(summary: dict, ref) -> str:
         t = summary["targets"][key]
         lines.append(f"| {label} | {_pct(t['value'])} | {_pct(t['target'])} | {t['met']} |")
     lines += [
+        f"| top-1 where ENR ≥ 1, counting a first effect flagged indistinct from the right one "
+        f"| {_pct(summary.get('top1_enr_ge_1_flagged'))} | | |",
+        f"| datasets whose first effect was flagged indistinct from another "
+        f"| {_pct(summary.get('flagged'))} | | |",
         f"| top-1 accuracy, all | {_pct(summary['top1'])} | | |",
         f"| top-2 accuracy, all | {_pct(summary['top2'])} | | |",
         f"| exact verdict, all | {_pct(summary['exact'])} | | |",

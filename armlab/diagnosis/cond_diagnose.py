@@ -49,7 +49,7 @@ def _gap(resid: np.ndarray, y: np.ndarray, noise: np.ndarray, mask: np.ndarray) 
 
 def _breakdowns(cs: CondSet, y: np.ndarray, resid: np.ndarray) -> dict:
     """Held-out gap by window after onset, joint, perturbation direction and frequency band."""
-    noise = cs.noise_var[cs.row_channel]
+    noise = cs.row_noise_var
     t_ms = 1000.0 * cs.row_time_s
     held = cs.held
     windows = [
@@ -123,7 +123,7 @@ def _identify(cs: CondSet, target_rows: np.ndarray) -> list[dict]:
 
 def _stage(cs: CondSet, y: np.ndarray, model: FittedModel, measured_ident: list[dict]) -> dict:
     gap, _, _ = held_out_gap(model, (cs,), [y])
-    floor = float(np.sum(cs.noise_var[cs.row_channel][cs.held])) / float(np.sum(y[cs.held] ** 2))
+    floor = float(np.sum(cs.row_noise_var[cs.held])) / float(np.sum(y[cs.held] ** 2))
     sim_ident = _identify(cs, model.predictions[0])
     bias = [
         {"t_obs_s": m["t_obs_s"], **{k: m[k] - s[k] for k in PARAM_NAMES}, "measured": m, "simulated": s}
@@ -152,10 +152,11 @@ def diagnose_cond(trials, cfg: DiagnosisConfig) -> tuple[dict, dict]:
     Returns:
         (results, series) — ``series["all"]`` holds the scoring set and each stage's prediction.
     """
+    cfg = cfg.for_protocol("conditioning_window")
     cs = prepare_cond(trials, band_hz=cfg.band_hz, holdout_fraction=cfg.holdout_fraction)
     y = cs.y
     names = cond_candidates(cfg)
-    floor = float(np.sum(cs.noise_var[cs.row_channel][cs.held])) / float(np.sum(y[cs.held] ** 2))
+    floor = float(np.sum(cs.row_noise_var[cs.held])) / float(np.sum(y[cs.held] ** 2))
     sel = select_effects(
         (cs,),
         [y],
@@ -180,7 +181,10 @@ def diagnose_cond(trials, cfg: DiagnosisConfig) -> tuple[dict, dict]:
             "nominal": stages[0]["held_out_gap"],
             "added": [{"effects": s["effects"], "held_out_gap": s["held_out_gap"]} for s in stages[1:]],
             "noise_floor": floor,
-            "noise_source": "variance of the band-limited torque over the pre-onset hold, per joint",
+            "noise_source": (
+                "band-limited torque over the pre-onset hold, as hand-force noise through each row's "
+                "J(q)^T, plus the baseline-mean variance"
+            ),
         },
         "where": {
             "windows": stages[0]["windows"],
@@ -192,6 +196,7 @@ def diagnose_cond(trials, cfg: DiagnosisConfig) -> tuple[dict, dict]:
         },
         "how_far": stages,
         "indistinct": sel.indistinct,
+        "partial": sel.partial,
         "trials": list(cs.names),
         "scoring": {"held_out_trials": int(cs.held_trials.sum()), "window_s": cs.n_window / cs.fs_hz},
     }

@@ -8,7 +8,8 @@ joint models (:mod:`armlab.diagnosis.joint_models`):
 - **additive** columns: ``reflex`` (a delayed stretch feedback ``Kr dq(t-d) + Dr qd(t-d)``
   through a 2nd-order activation low-pass, Kr and Dr symmetric, the shape a muscle reflex
   through the moment arms takes), and
-  ``joint_friction`` (Coulomb ``tanh(qd_i / v0)`` at each joint);
+  ``joint_friction`` (Coulomb ``tanh(qd_i / v0_i)`` at each joint, band-limited like the
+  measured torque);
 - **intrinsic**: ``cuff_compliance`` — the arm follows the robot's hand position less the
   stretch of a series spring-damper (compliance ``c`` m/N, time constant ``b/k``) under the
   force, ``dq - c·J⁻¹ΔF/(1 + s·b/k)`` (the cuff shell's mass moves with the forearm and is
@@ -26,10 +27,16 @@ from __future__ import annotations
 import numpy as np
 from scipy import signal
 
-from armlab.diagnosis.cond_data import CondSet
-from armlab.diagnosis.joint_models import ModelFamily, NLParam, Surrogate, lowpass2, shift_columns
+from armlab.diagnosis.cond_data import CHANNELS, CondSet
+from armlab.diagnosis.joint_models import (
+    ModelFamily,
+    NLParam,
+    Surrogate,
+    lowpass2,
+    shift_columns,
+)
 from armlab.estimation.joint_ls import PARAM_NAMES, regressor
-from armlab.estimation.processing import differentiate
+from armlab.estimation.processing import differentiate, lowpass_zero_phase
 
 __all__ = [
     "COND_FAMILY",
@@ -79,11 +86,11 @@ def cond_columns(cs: CondSet, model: tuple[Surrogate, ...], theta: dict[str, flo
         for z in (cs.dq, cs.qd):  # through a critically damped excitation-to-force low-pass
             blocks.append(_sym_columns(lowpass2(_delayed(cs, z, d), fc, 1.0, cs.fs_hz, axis=1)))
     if "joint_friction" in names:
-        v0 = theta["joint_friction.velocity_rad_s"]
         fr = np.zeros((*cs.qd.shape, 2))
-        fr[..., 0, 0] = np.tanh(cs.qd[..., 0] / v0)
-        fr[..., 1, 1] = np.tanh(cs.qd[..., 1] / v0)
-        blocks.append(fr)
+        for j, joint in enumerate(CHANNELS):
+            fr[..., j, j] = np.tanh(cs.qd[..., j] / theta[f"joint_friction.velocity_{joint}_rad_s"])
+        # the measured torque is band-limited: so is the friction step it carries
+        blocks.append(lowpass_zero_phase(fr, cs.fs_hz, cs.band_hz, 4, axis=1))
     phi = np.concatenate(blocks, axis=-1)  # (m, n, 2, k)
     if "channel_delay" in names:
         phi = _delayed(cs, phi, theta["channel_delay.delay_s"])
@@ -94,10 +101,12 @@ def cond_columns(cs: CondSet, model: tuple[Surrogate, ...], theta: dict[str, flo
 
 
 def cond_linear_names(model: tuple[Surrogate, ...]) -> tuple[str, ...]:
+    """Names of the linear parameters, in the column order of :func:`cond_columns`."""
+    names = {s.name: s for s in model}
     out = list(PARAM_NAMES)
-    for s in model:
-        if s.kind == "additive":
-            out += [f"{s.name}.{n}" for n in s.linear]
+    for key in ("reflex", "joint_friction"):  # the additive blocks' fixed order
+        if key in names:
+            out += [f"{key}.{n}" for n in names[key].linear]
     return tuple(out)
 
 
@@ -129,7 +138,13 @@ COND_SURROGATES: dict[str, Surrogate] = {
         Surrogate(
             "joint_friction",
             "additive",
-            (NLParam("velocity_rad_s", 1e-3, 0.3, (0.003, 0.01, 0.03, 0.1), log=True),),
+            # rad/s, the sliding velocity of each joint's Coulomb transition: a joint's own, since
+            # a soft friction constraint's transition scales with the inertia the joint sees (a
+            # shared one left twice the residual on the referee's friction datasets)
+            tuple(
+                NLParam(f"velocity_{joint}_rad_s", 1e-4, 0.3, (0.001, 0.003, 0.01, 0.03), log=True)
+                for joint in CHANNELS
+            ),
             ("coulomb_shoulder", "coulomb_elbow"),
         ),
         Surrogate(

@@ -135,6 +135,7 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
         },
         "how_far": stages,
         "indistinct": sel.indistinct,
+        "partial": sel.partial,
         "torque_sign": "antiphase (impedance = -torque/position)" if sign < 0 else "in phase",
         "trials": [tr.name for tr in trials],
     }
@@ -163,6 +164,7 @@ def diagnose_joint(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
         ``verdict`` per trial; ``series`` is keyed by trial name.
     """
     records = list(records)
+    cfg = cfg.for_protocol("joint_1dof")
     settings = asdict(cfg)
     if not cfg.per_trial:
         results, series = _diagnose_group(records, cfg)

@@ -12,8 +12,11 @@ Every trial (position in, torque out, as imported by :mod:`armlab.data.joint_imp
    first and last samples are band-limited too (odd padding pins them to the raw, full-band
    noisy values);
 3. decimation to ``fs_fit_hz`` (every q-th sample);
-4. the slow torque ``m(t)`` (zero-phase low-pass at ``slow_hz``, zero mean, unit rms): the
-   subject's tonic contraction level, the covariate of the co-contraction candidate.
+4. the slow torque ``m(t)``: the zero-phase low-pass at ``slow_hz`` of the torque, less its
+   least-squares fit by the equally low-passed position and a constant (the joint's static
+   stiffness acting on the perturbation's own slow content, which would otherwise dominate it),
+   scaled to zero mean and unit rms: the subject's tonic contraction level, the covariate of the
+   co-contraction candidate.
 
 The gap is scored in the perturbation band ``[highpass_hz, band_hz]``: below ``highpass_hz`` the
 torque is dominated by the subject's voluntary/tonic fluctuations, which no protocol model
@@ -96,6 +99,15 @@ def _zero_phase_lowpass(z: np.ndarray, fc: float, fs: float, order: int = 4, axi
     return signal.sosfiltfilt(sos, z, axis=axis, padtype="even")
 
 
+def _tonic_torque(position: np.ndarray, torque: np.ndarray, slow_hz: float, fs: float) -> np.ndarray:
+    """Slow torque not explained by the slow position: ``lp(τ) − (c0 + c1·lp(θ))``, least squares."""
+    slow_t = _zero_phase_lowpass(torque, slow_hz, fs, order=2)
+    slow_x = _zero_phase_lowpass(position, slow_hz, fs, order=2)
+    basis = np.stack([np.ones_like(slow_x), slow_x], axis=1)
+    coef, *_ = np.linalg.lstsq(basis, slow_t, rcond=None)
+    return slow_t - basis @ coef
+
+
 def prepare_trials(
     records,
     *,
@@ -150,7 +162,7 @@ def prepare_trials(
         vr = np.gradient(xr, 1.0 / fs, edge_order=2)
         ar = np.gradient(vr, 1.0 / fs, edge_order=2)
         x, v, a, y = (_zero_phase_lowpass(z, band_hz, fs) for z in (xr, vr, ar, np.asarray(r.torque, float)))
-        slow = _zero_phase_lowpass(np.asarray(r.torque, float), slow_hz, fs, order=2)[::q]
+        slow = _tonic_torque(xr, np.asarray(r.torque, float), slow_hz, fs)[::q]
         slow = slow - slow.mean()
         rms = float(np.sqrt(np.mean(slow**2)))
         m = slow / rms if rms > 0 else slow

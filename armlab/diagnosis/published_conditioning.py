@@ -25,18 +25,21 @@ closest to the published ones, and by how much the distance shrinks. What cannot
 - the constancy criterion depends on armlab's ``estimator.constancy_tol`` (the paper gives no
   tolerance) and its 400 ms lies in the coarse extension windows, so it is reported, not scored.
 
-Pure computation except :func:`run_published_conditioning`, which writes results.json and
-report.md through :mod:`armlab.protocols._files`.
+The variant catalogue lives in :mod:`armlab.diagnosis.published_variants`, the Markdown report in
+:mod:`armlab.diagnosis._published_conditioning_text` (both re-exported here). Pure computation
+except :func:`run_published_conditioning`, which writes results.json and report.md through
+:mod:`armlab.protocols._files`.
 """
 
 from __future__ import annotations
 
-import dataclasses
 import time
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from pathlib import Path
 
 from armlab.config.schema import ExperimentConfig
+from armlab.diagnosis._published_conditioning_text import CRITERIA, format_report
+from armlab.diagnosis.published_variants import Variant, candidate_variants
 from armlab.errors import ArmlabError, ConfigError
 from armlab.protocols._files import new_dir, write_json, write_new
 from armlab.protocols.conditioning_window import (
@@ -60,10 +63,8 @@ __all__ = [
     "threshold_gap",
 ]
 
-CRITERIA = ("K_pd", "symmetric", "constant")
 _SIM_KEY = {"K_pd": "K_pd_from_s", "symmetric": "symmetric_from_s", "constant": "constant_from_s"}
 _PAPER_KEY = {"K_pd": "K_pd_after_s", "symmetric": "symmetric_after_s", "constant": "constant_after_s"}
-_LABEL = {"K_pd": "K positive definite", "symmetric": "K, D quasi-symmetric", "constant": "quasi-constant"}
 SCORED_CRITERIA = ("K_pd", "symmetric")
 # ms, score of a criterion never reached: above the largest in-grid gap (windows 120-500 ms against
 # paper values 320-400 ms: at most 380 ms), so reaching a criterion always beats missing it
@@ -72,121 +73,6 @@ NOT_REACHED_PENALTY_MS = 500.0
 # 7 trials per window (6 identify, 1 validates)
 QUICK_K_VALUES = (2, 8, 14, 20, 26)
 QUICK_N_TRIALS = 7
-# s, short-latency stretch reflex 25-50 ms (conditioning paper II-B); the nominal is 35 ms
-STRETCH_LATENCIES_S = (0.025, 0.050)
-REFLEX_GAIN_FACTOR = 2.0  # on the assumed reflex gains of ReflexConfig (assumption: a doubling)
-CUFF_STIFFNESS_FACTORS = (0.5, 2.0)  # on the assumed 2e4 N/m of CuffConfig (order-of-magnitude range)
-COCONTRACTION_FACTORS = (0.5, 2.0)  # on the nominal activation 0.2 of ArmConfig (assumption)
-LOWPASS_ALT_HZ = 40.0  # Hz, the alternative cutoff named in EstimatorConfig (paper IV-C gives none)
-
-
-@dataclass(frozen=True, kw_only=True)
-class Variant:
-    """One named change of the config: ``set_values`` assigned, then ``scale`` factors applied.
-
-    Paths are ``"<group>.<field>"`` of :class:`ExperimentConfig` (e.g. ``"reflex.enabled"``).
-    """
-
-    name: str
-    effect: str  # the effect family: reflex, cuff, sensors, muscle, cocontraction, filter
-    description: str
-    set_values: tuple[tuple[str, object], ...] = ()
-    scale: tuple[tuple[str, float], ...] = ()
-
-    def apply(self, cfg: ExperimentConfig) -> ExperimentConfig:
-        """The varied config (each group's ``__post_init__`` validates the new values)."""
-        for path, value in self.set_values:
-            cfg = _with(cfg, path, value)
-        for path, factor in self.scale:
-            cfg = _with(cfg, path, _get(cfg, path) * factor)
-        return cfg
-
-
-def _split(cfg: ExperimentConfig, path: str) -> tuple[str, str]:
-    group, _, name = path.partition(".")
-    groups = [f.name for f in dataclasses.fields(cfg) if dataclasses.is_dataclass(getattr(cfg, f.name))]
-    if group not in groups:
-        raise ConfigError(f"variant path {path!r}: unknown group {group!r}; valid: {groups}")
-    names = [f.name for f in dataclasses.fields(getattr(cfg, group))]
-    if name not in names:
-        raise ConfigError(f"variant path {path!r}: unknown field {name!r}; valid: {names}")
-    return group, name
-
-
-def _get(cfg: ExperimentConfig, path: str):
-    group, name = _split(cfg, path)
-    return getattr(getattr(cfg, group), name)
-
-
-def _with(cfg: ExperimentConfig, path: str, value) -> ExperimentConfig:
-    group, name = _split(cfg, path)
-    return replace(cfg, **{group: replace(getattr(cfg, group), **{name: value})})
-
-
-def _v(name: str, effect: str, description: str, sets=(), scale=()) -> Variant:
-    return Variant(
-        name=name, effect=effect, description=description, set_values=tuple(sets), scale=tuple(scale)
-    )
-
-
-def candidate_variants(cfg: ExperimentConfig) -> list[Variant]:
-    """The default single changes, toggles taken relative to ``cfg`` (12 variants)."""
-    on, rigid, k_cuff = cfg.reflex.enabled, cfg.cuff.rigid, cfg.cuff.stiffness_N_per_m
-    sensors = "ideal" if cfg.sensors.preset == "realistic" else "realistic"
-    muscle = "linear" if cfg.arm.muscle == "hill" else "hill"
-    gains = [(f"reflex.{g}_gain", REFLEX_GAIN_FACTOR) for g in ("stretch", "velocity", "spinal")]
-    reflex_on = [("reflex.enabled", True)]
-    return [
-        _v(
-            f"reflex_{'off' if on else 'on'}",
-            "reflex",
-            f"reflexes {'off' if on else 'on'}",
-            [("reflex.enabled", not on)],
-        ),
-        _v("reflex_gain_x2", "reflex", "every reflex gain x2 (reflex on)", reflex_on, gains),
-        *(
-            _v(
-                f"reflex_latency_{t * 1e3:.0f}ms",
-                "reflex",
-                f"stretch-reflex latency {t * 1e3:.0f} ms (reflex on)",
-                [*reflex_on, ("reflex.stretch_latency_s", t)],
-            )
-            for t in STRETCH_LATENCIES_S
-        ),
-        _v(
-            f"cuff_{'compliant' if rigid else 'rigid'}",
-            "cuff",
-            f"{'compliant' if rigid else 'rigid'} cuff",
-            [("cuff.rigid", not rigid)],
-        ),
-        *(
-            _v(
-                f"cuff_stiffness_x{f:g}",
-                "cuff",
-                f"compliant cuff, {k_cuff * f:.0f} N/m",
-                [("cuff.rigid", False)],
-                [("cuff.stiffness_N_per_m", f)],
-            )
-            for f in CUFF_STIFFNESS_FACTORS
-        ),
-        _v(f"sensors_{sensors}", "sensors", f"{sensors} sensors", [("sensors.preset", sensors)]),
-        _v(f"muscle_{muscle}", "muscle", f"{muscle} muscles", [("arm.muscle", muscle)]),
-        *(
-            _v(
-                f"cocontraction_x{f:g}",
-                "cocontraction",
-                f"co-contraction {cfg.arm.cocontraction * f:g}",
-                scale=[("arm.cocontraction", f)],
-            )
-            for f in COCONTRACTION_FACTORS
-        ),
-        _v(
-            f"lowpass_{LOWPASS_ALT_HZ:g}hz",
-            "filter",
-            f"low-pass {LOWPASS_ALT_HZ:g} Hz (same recording)",
-            [("estimator.lowpass_hz", LOWPASS_ALT_HZ)],
-        ),
-    ]
 
 
 def _checked(cfg: ExperimentConfig, quick: bool) -> ExperimentConfig:
@@ -369,68 +255,6 @@ def _verdict(nominal: dict, ranked: list[dict], windows_s: list[float], n_scored
         "tied_with": ties,
         "text": text,
     }
-
-
-def _ms(x: float | None) -> str:
-    return "not reached" if x is None else f"{x * 1e3:.0f}"
-
-
-def format_report(result: dict) -> str:
-    """Markdown report of :func:`diagnose_thresholds`: paper vs nominal vs variants, the verdict."""
-    paper, nom = result["paper_s"], result["nominal"]
-    lines = [
-        "# Published conditioning thresholds vs the simulated lab",
-        "",
-        "Full 11-parameter least squares, conditioning paper section IV-D; thresholds in ms of T_obs "
-        f"(first window from which the criterion holds for good). Seed {result['seed']}, "
-        f"{'quick (reduced windows and trials)' if result['quick'] else 'full protocol'}; windows "
-        f"{_ms(result['windows_s'][0])}-{_ms(result['windows_s'][-1])} ms. Distance = sum of "
-        f"|simulated - paper| over {', '.join(result['scored'])}; "
-        f"not reached = {result['not_reached_penalty_ms']:.0f} ms.",
-        "",
-        "## Paper vs nominal",
-        "",
-        "| criterion | paper | nominal | gap |",
-        "|---|---|---|---|",
-    ]
-    for c in CRITERIA:
-        g = nom["criteria"][c]
-        lines.append(f"| {_LABEL[c]} | {_ms(paper[c])} | {_ms(g['simulated_s'])} | {g['text']} |")
-    lines += [
-        "",
-        f"Nominal distance: {nom['distance_ms']:.0f} ms.",
-        "",
-        "## Single changes, ranked",
-        "",
-        "| rank | variant | change | K-PD | symmetric | constant | distance | shrink |",
-        "|---|---|---|---|---|---|---|---|",
-        f"| - | paper | published | {_ms(paper['K_pd'])} | {_ms(paper['symmetric'])} | "
-        f"{_ms(paper['constant'])} | 0 | |",
-        f"| - | nominal | - | {_ms(nom['criteria']['K_pd']['simulated_s'])} | "
-        f"{_ms(nom['criteria']['symmetric']['simulated_s'])} | "
-        f"{_ms(nom['criteria']['constant']['simulated_s'])} | {nom['distance_ms']:.0f} | |",
-    ]
-    for i, e in enumerate(result["variants"], 1):
-        if e["error"]:
-            lines.append(f"| {i} | {e['name']} | {e['description']} | failed: {e['error']} | | | | |")
-            continue
-        th = [_ms(e["criteria"][c]["simulated_s"]) for c in CRITERIA]
-        lines.append(
-            f"| {i} | {e['name']} | {e['description']} | {' | '.join(th)} | "
-            f"{e['distance_ms']:.0f} | {e['shrink_ms']:+.0f} |"
-        )
-    lines += [
-        "",
-        "## Verdict",
-        "",
-        result["verdict"]["text"],
-        "",
-        "Caveats: windows are 10 ms apart (30-50 ms beyond 370 ms), one seed, single changes only; "
-        "a variant that matches the paper does not prove its effect is the cause. The constancy "
-        "threshold depends on armlab's constancy tolerance (the paper gives none).",
-        "",
-    ]
-    return "\n".join(lines)
 
 
 def run_published_conditioning(

@@ -176,11 +176,21 @@ def score_case(cls: str, results: dict, expected: set[str] | None = None) -> dic
     """Top-1, top-2 and full-verdict correctness of one diagnosis, and its held-out shrink.
 
     ``expected``: the right verdict as a set of names (default: the joint_1dof class's).
+    ``top1_flagged`` also counts a first effect that the diagnosis itself flagged as
+    indistinguishable from a right one on these trials (``indistinct``, with the trial that would
+    separate them): the answer "A or B, run a step trial to tell" is not wrong, but it is scored
+    apart from top-1, which does not count it.
     """
     expected = expected_verdict(cls) if expected is None else expected
     verdict = list(results["verdict"])
     ranking = [e["name"] for e in results["ranking"]]
     top1 = verdict[0] in expected
+    partners = {
+        name
+        for pair in results.get("indistinct", [])
+        if verdict[0] in pair["effects"] and max(pair["reductions"]) > 0
+        for name in pair["effects"]
+    } - {verdict[0]}
     if expected <= {"none", "unknown"}:
         top2 = top1
     else:
@@ -194,6 +204,8 @@ def score_case(cls: str, results: dict, expected: set[str] | None = None) -> dic
         "verdict": verdict,
         "predicted": verdict[0],
         "top1": bool(top1),
+        "top1_flagged": bool(top1 or expected & partners),
+        "flagged": bool(partners),
         "top2": bool(top2),
         "exact": set(verdict) == expected,
         "gap_nominal": nominal,
