@@ -61,9 +61,9 @@ def test_bad_diagnosis_settings_are_refused(kw, message):
         ),
         ({"replicates": 0}, "referee.replicates >= 1 and n_trials >= 2"),
         ({"n_trials": 1}, "referee.replicates >= 1 and n_trials >= 2"),
-        ({"enr_range": (2.0, 1.0)}, "referee.enr_range must satisfy 0 < lo <= hi, got (2.0, 1.0)"),
-        ({"enr_range": (0.0, 1.0)}, "referee.enr_range must satisfy 0 < lo <= hi"),
         ({"noise_std_Nm": 0.0}, "referee.noise_std_Nm must be > 0"),
+        ({"cond_windows": [0, 26]}, "referee.cond_windows must be window indices in 1..26, got [0, 26]"),
+        ({"cond_windows": []}, "referee.cond_windows must be window indices in 1..26"),
     ],
 )
 def test_bad_referee_settings_are_refused(kw, message):

@@ -25,12 +25,12 @@ DIAGNOSIS_PROTOCOLS = ("joint_1dof", "conditioning_window")
 #: held-out gap may scatter: 1-DoF joint clean tuning datasets (seed 0, 12 replicates) scored
 #: 1.06-1.33 × floor (mean 1.18: that floor, the smaller of the repeat and second-difference
 #: estimates, runs low), the conditioning window's (seed 7, 10 replicates) 0.79-1.29 × floor
-#: (sd 0.14); 0.4 for both. ``min_explained``: the share of the nominal excess the selected effects must remove,
-#: else the verdict is ``unknown`` with the effects kept as a partial explanation; a left-out reflex
-#: was 56-85 % "explained" by a force-sensor low-pass or a channel delay in the conditioning
-#: window, where correct single effects remove 85-100 % (friction 91-94 %); the joint protocol's
-#: co-contraction surrogate removes only 67-76 % of a strong variation (tuning seed 0), and no
-#: left-out effect there was partly absorbed.
+#: (sd 0.14); 0.4 for both. ``min_explained``: the share of the nominal excess the selected
+#: effects must remove, else the verdict is ``unknown`` with the effects kept as a partial
+#: explanation; a left-out reflex was 56-85 % "explained" by a force-sensor low-pass or a
+#: channel delay in the conditioning window, where correct single effects remove 85-100 %
+#: (friction 91-94 %); the joint protocol's co-contraction surrogate removes only 67-76 % of a
+#: strong variation (tuning seed 0), and no left-out effect there was partly absorbed.
 PROTOCOL_RULES: dict[str, dict[str, float]] = {
     "joint_1dof": {"none_tolerance": 0.4, "min_explained": 0.5},
     "conditioning_window": {"none_tolerance": 0.4, "min_explained": 0.8},
@@ -113,7 +113,6 @@ class RefereeConfig:
     cond_trials: int = 30
     cond_windows: list[int] = field(default_factory=lambda: [26])
     force_noise_N: float = 0.3
-    enr_range: tuple[float, float] = (0.5, 4.0)  # effect-to-noise ratio, log-uniform
     classes: list[str] | None = None  # None: every class of the protocol
     jobs: int = 2  # datasets diagnosed in parallel (joblib)
 
@@ -123,8 +122,6 @@ class RefereeConfig:
             f"referee protocol {self.protocol!r} is not available; choose one of {list(DIAGNOSIS_PROTOCOLS)}",
         )
         _check(self.replicates >= 1 and self.n_trials >= 2, "referee.replicates >= 1 and n_trials >= 2")
-        lo, hi = self.enr_range
-        _check(0 < lo <= hi, f"referee.enr_range must satisfy 0 < lo <= hi, got {self.enr_range}")
         _check(self.noise_std_Nm > 0, "referee.noise_std_Nm must be > 0")
         _check(self.force_noise_N > 0, "referee.force_noise_N must be > 0")
         _check(self.cond_trials >= 6, "referee.cond_trials must be >= 6 (one per perturbation direction)")

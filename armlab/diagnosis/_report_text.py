@@ -179,8 +179,7 @@ def _verdict_paragraph(r: Mapping[str, Any], settings: Mapping[str, Any] | None)
             "**Verdict: no gap beyond measurement noise.** The nominal simulation already reaches a "
             f"held-out VAF of {_vaf(nominal)} (gap {_pct(nominal)}) at the {floor_words}: its excess over "
             f"the floor is within the {100 * _rule(r, settings, 'none_tolerance'):.0f} % tolerance. "
-            "No unmodelled effect "
-            "is needed; the candidate ranking below is shown for completeness."
+            "No unmodelled effect is needed; the candidate ranking below is shown for completeness."
         )
     partial = list(r.get("partial") or [])
     removed = (nominal - final) / excess0 if excess0 > 0 else 0.0

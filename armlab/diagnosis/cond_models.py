@@ -28,13 +28,7 @@ import numpy as np
 from scipy import signal
 
 from armlab.diagnosis.cond_data import CHANNELS, CondSet
-from armlab.diagnosis.joint_models import (
-    ModelFamily,
-    NLParam,
-    Surrogate,
-    lowpass2,
-    shift_columns,
-)
+from armlab.diagnosis.joint_models import ModelFamily, NLParam, Surrogate, lowpass2, shift_columns
 from armlab.estimation.joint_ls import PARAM_NAMES, regressor
 from armlab.estimation.processing import differentiate, lowpass_zero_phase
 

@@ -176,14 +176,17 @@ def make_cond_dataset(
 
     y_noisy = prepare_cond(rec.trials, band_hz=diag.band_hz, holdout_fraction=diag.holdout_fraction).y
     clean = prepared(clean_cfg)
-    base = prepared(base_cfg) if hidden else clean
     noise_rms = float(np.sqrt(np.mean((y_noisy - clean.y) ** 2)))
-    effect_rms = float(np.sqrt(np.mean((clean.y - base.y) ** 2))) if hidden else 0.0
-    # the part of the effect the calibrated nominal model cannot absorb: the residual of Eq. (9)
-    # fitted to the noise-free recording with the effects (all trials), less the residual it
-    # leaves on the same recording without them (the linearisation's own, a few 1e-4 of noise)
-    unabsorbed = _eq9_residual(clean) - _eq9_residual(base)
-    unabsorbed_rms = float(np.sqrt(np.mean(unabsorbed**2))) if hidden else 0.0
+    effect_rms = unabsorbed_rms = 0.0
+    if hidden:
+        base = prepared(base_cfg)
+        effect_rms = float(np.sqrt(np.mean((clean.y - base.y) ** 2)))
+        # the part of the effect the calibrated nominal model cannot absorb: the residual of
+        # Eq. (9) fitted to the noise-free recording with the effects (all trials), less the
+        # residual it leaves on the same recording without them (the linearisation's own, a few
+        # 1e-4 of the noise)
+        unabsorbed = _eq9_residual(clean) - _eq9_residual(base)
+        unabsorbed_rms = float(np.sqrt(np.mean(unabsorbed**2)))
     folder.mkdir(parents=True, exist_ok=False)
     write_trials(folder / "trials.h5", _clean_trials(rec.trials))
     truth = {
