@@ -39,6 +39,7 @@ import numpy as np
 from scipy import signal
 
 from armlab.errors import DataError
+from armlab.estimation.processing import differentiate
 
 __all__ = [
     "NoiseFloor",
@@ -159,8 +160,10 @@ def prepare_trials(
                 "(training part, held-out part and the filter edges)"
             )
         xr = np.asarray(r.position, float)
-        vr = np.gradient(xr, 1.0 / fs, edge_order=2)
-        ar = np.gradient(vr, 1.0 / fs, edge_order=2)
+        # fourth-order central differences: the three-point stencil (np.gradient twice) misses
+        # (ωΔt)²/3 = 2 % of the acceleration at 40 Hz, 1 kHz, which left clean referee recordings
+        # 13-24 % of the noise variance above the floor; five points leave 4e-5
+        vr, ar = differentiate(xr, fs, axis=0)
         x, v, a, y = (_zero_phase_lowpass(z, band_hz, fs) for z in (xr, vr, ar, np.asarray(r.torque, float)))
         slow = _tonic_torque(xr, np.asarray(r.torque, float), slow_hz, fs)[::q]
         slow = slow - slow.mean()
