@@ -124,6 +124,11 @@ def _ratio(gap: Any, floor: Any) -> str:
     return f"{g / f:,.0f}×" if g / f >= 100 else f"{g / f:.3g}×"
 
 
+def _gap_cells(gap: Any, floor: Any) -> list[str]:
+    """The cells ``gap | noise floor | gap / floor`` of a where-table row."""
+    return [_pct(gap), _pct(floor), _ratio(gap, floor)]
+
+
 def _label(name: str) -> str:
     return f"{_LABELS.get(name, name.replace('_', ' '))} (`{name}`)"
 

@@ -6,6 +6,7 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from armlab.diagnosis._report_text import (
+    _gap_cells,
     _label,
     _num,
     _own_params,
@@ -30,9 +31,7 @@ def _gap_rows(entries: Sequence[Mapping[str, Any]], label) -> list[list[str]]:
     return [
         [
             label(e),
-            _pct(e["held_out_gap"]),
-            _pct(e["noise_floor"]),
-            _ratio(e["held_out_gap"], e["noise_floor"]),
+            *_gap_cells(e["held_out_gap"], e["noise_floor"]),
         ]
         for e in entries
     ]
@@ -47,9 +46,7 @@ def _where(r: Mapping[str, Any]) -> list[str]:
         [
             [
                 f"{e['window_ms'][0]:g}–{e['window_ms'][1]:g} ms",
-                _pct(e["held_out_gap"]),
-                _pct(e["noise_floor"]),
-                _ratio(e["held_out_gap"], e["noise_floor"]),
+                *_gap_cells(e["held_out_gap"], e["noise_floor"]),
                 _window_meaning(*e["window_ms"]),
             ]
             for e in w["windows"]

@@ -22,6 +22,7 @@ from armlab.diagnosis._report_text import (
     _WHITE_FRACTION,
     _figures,
     _finite,
+    _gap_cells,
     _ms,
     _num,
     _own_params,
@@ -63,9 +64,7 @@ def _where(r: Mapping[str, Any], h: str) -> list[str]:
         [
             [
                 f"{b['band_hz'][0]:g}–{b['band_hz'][1]:g}",
-                _pct(b["gap"]),
-                _pct(b["floor"]),
-                _ratio(b["gap"], b["floor"]),
+                *_gap_cells(b["gap"], b["floor"]),
                 _pct((_finite(b.get("residual_power")) or 0.0) / total) if total > 0 else "–",
             ]
             for b in bands
@@ -89,9 +88,7 @@ def _where(r: Mapping[str, Any], h: str) -> list[str]:
         [
             [
                 f"{x['window_ms'][0]:g}–{x['window_ms'][1]:g}",
-                _pct(x["gap"]),
-                _pct(x["floor"]),
-                _ratio(x["gap"], x["floor"]),
+                *_gap_cells(x["gap"], x["floor"]),
                 x.get("samples", "–"),
             ]
             for x in windows
