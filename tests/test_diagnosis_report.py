@@ -17,6 +17,7 @@ from conftest import JointTrial, friction_torque, nominal_torque, prbs_position,
 
 from armlab.config.diagnosis import DiagnosisConfig
 from armlab.config.effects import EFFECTS
+from armlab.diagnosis._report_text import _why_rejected
 from armlab.diagnosis.diagnose import diagnose_joint
 from armlab.diagnosis.report import format_report, format_summary
 from armlab.protocols._files import json_default
@@ -144,6 +145,9 @@ def test_per_trial_report_has_summary_table_then_one_section_per_trial(per_trial
         row = next(line for line in table.splitlines() if line.startswith(f"| `{p['trial']}` |"))
         assert ", then ".join(p["verdict"]) in row
         assert f"`{p['ranking'][0]['name']}`" in row
+        # the first-ranked candidate's own held-out VAF, accepted or not
+        alone = float(row.split("|")[4].split("%")[0])
+        assert abs(alone - 100 * (1 - p["ranking"][0]["held_out_gap"])) < 0.05
         nominal, final = p["gap"]["nominal"], stages[-1]["held_out_gap"]
         assert f"{100 * (1 - nominal):.1f} % → " in row
         # near 100 % the report prints more decimals: compare the printed number
@@ -191,3 +195,20 @@ def test_format_summary_is_a_few_lines(pooled, per_trial):
     assert len(text_t.splitlines()) <= 1 + 3 * len(per_trial["per_trial"])
     for p in per_trial["per_trial"]:
         assert f"{p['trial']}: verdict {' -> '.join(p['verdict'])}" in text_t
+
+
+@pytest.mark.parametrize(
+    ("entry", "words"),
+    [
+        # a share just under the first-effect rule prints with two decimals, not as the rule
+        (
+            {"explained_fraction": 0.39971, "delta_bic": -708.0},
+            "39.97 % of the excess over the floor, under the 40 %",
+        ),
+        ({"explained_fraction": 0.9, "delta_bic": -3.0}, "does not beat the margin −10"),
+        ({"explained_fraction": 0.9, "delta_bic": -50.0}, "under the smallest step"),
+    ],
+)
+def test_unknown_verdict_names_the_rule_the_best_candidate_failed(entry, words):
+    settings = {"min_first_explained": 0.4, "bic_margin": 10.0}
+    assert words in _why_rejected(entry, {}, settings)

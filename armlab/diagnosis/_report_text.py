@@ -160,6 +160,23 @@ def _own_params(name: str, params: Mapping[str, Any]) -> str:
 # ---------------------------------------------------------------------------------------------
 
 
+def _why_rejected(best: Mapping[str, Any], r: Mapping[str, Any], settings: Mapping[str, Any] | None) -> str:
+    """The acceptance rule (attribution.select_effects) the best first candidate failed, in words."""
+    s = settings or r.get("settings") or {}
+    share, dbic = _finite(best.get("explained_fraction")), _finite(best.get("delta_bic"))
+    excess = f"{_share(share)} of the excess over the floor"
+    need, margin = _finite(s.get("min_first_explained")), _finite(s.get("bic_margin"))
+    if dbic is not None and margin is not None and dbic >= -margin:
+        return f"{excess}, but its Δ penalised score {_score(dbic)} does not beat the margin −{margin:g}"
+    if share is not None and need is not None and share < need:
+        # two decimals: a share just under the rule must not print as the rule itself
+        return (
+            f"{100.0 * share:.2f} % of the excess over the floor, under the {_part(need)} a first "
+            f"effect must explain (Δ penalised score {_score(dbic)})"
+        )
+    return f"{excess}, under the smallest step the selection accepts (Δ penalised score {_score(dbic)})"
+
+
 def _rule(results: Mapping[str, Any], settings: Mapping[str, Any] | None, name: str) -> float:
     """A selection threshold as the diagnosis used it (older results: the protocol's default)."""
     from armlab.config.diagnosis import PROTOCOL_RULES
@@ -206,9 +223,8 @@ def _verdict_paragraph(r: Mapping[str, Any], settings: Mapping[str, Any] | None)
         ranking = r.get("ranking") or []
         best = next((e for e in ranking if e.get("identifiable", True)), None)
         best_words = (
-            f" The best candidate, {_label(best['name'])}, would lower the gap by only "
-            f"{_pct(best['gap_reduction'])} ({_share(best['explained_fraction'])} of the excess over "
-            f"the floor; Δ penalised score {_score(best['delta_bic'])})."
+            f" The best candidate, {_label(best['name'])}, would lower the gap by "
+            f"{_pct(best['gap_reduction'])}: {_why_rejected(best, r, settings)}."
             if best
             else ""
         )

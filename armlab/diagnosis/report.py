@@ -405,18 +405,29 @@ def format_report(results: Mapping[str, Any], *, data_path: str, figures: Sequen
         for p in per:
             stages = p.get("how_far") or []
             final = stages[-1]["held_out_gap"] if stages else p["gap"]["nominal"]
-            top = (p.get("ranking") or [{}])[0].get("name")
+            first = (p.get("ranking") or [{}])[0]
+            top = first.get("name")
             rows.append(
                 [
                     f"`{p['trial']}`",
                     ", then ".join(p["verdict"]),
                     f"`{top}`" if top else "–",
+                    # shown whether or not it was accepted: the gain the first-ranked effect alone gives
+                    _vaf(first["held_out_gap"]) if first.get("identifiable", True) and top else "–",
                     f"{_vaf(p['gap']['nominal'])} → {_vaf(final)}",
                     _pct(p["gap"]["noise_floor"]),
                 ]
             )
         lines += _table(
-            ["trial", "verdict", "top-ranked candidate", "held-out VAF nominal → final", "noise floor"], rows
+            [
+                "trial",
+                "verdict",
+                "top-ranked candidate",
+                "held-out VAF with it alone",
+                "held-out VAF nominal → final",
+                "noise floor",
+            ],
+            rows,
         )
         verdicts = {tuple(p["verdict"]) for p in per}
         lines += [
