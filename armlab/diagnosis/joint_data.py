@@ -3,7 +3,7 @@
 Every trial (position in, torque out, as imported by :mod:`armlab.data.joint_import`) becomes a
 :class:`PreparedTrial` at the fitting rate:
 
-1. velocity and acceleration by central differences of the raw position at the recorded rate;
+1. velocity and acceleration by five-point central differences of the raw position at the recorded rate;
 2. zero-phase 4th-order Butterworth low-pass at ``band_hz`` of position, velocity, acceleration
    and torque at the recorded rate (anti-alias; identical on every channel, so their relative
    timing is kept). Differentiating first keeps the filtered torque the same linear combination
