@@ -28,7 +28,14 @@ import numpy as np
 from scipy import signal
 
 from armlab.diagnosis.cond_data import CHANNELS, CondSet
-from armlab.diagnosis.joint_models import ModelFamily, NLParam, Surrogate, lowpass2, shift_columns
+from armlab.diagnosis.joint_models import (
+    ModelFamily,
+    NLParam,
+    Surrogate,
+    lowpass2,
+    sensor_lowpass,
+    shift_columns,
+)
 from armlab.estimation.joint_ls import PARAM_NAMES, regressor
 from armlab.estimation.processing import differentiate, lowpass_zero_phase
 
@@ -89,8 +96,7 @@ def cond_columns(cs: CondSet, model: tuple[Surrogate, ...], theta: dict[str, flo
     if "channel_delay" in names:
         phi = _delayed(cs, phi, theta["channel_delay.delay_s"])
     if "force_sensor_bandwidth" in names:
-        b, a = signal.butter(2, theta["force_sensor_bandwidth.cutoff_hz"], fs=cs.fs_hz)
-        phi = signal.lfilter(b, a, phi - phi[:, :1], axis=1) + phi[:, :1]
+        phi = sensor_lowpass(phi, theta["force_sensor_bandwidth.cutoff_hz"], cs.fs_hz, axis=1)
     return cs.rows(phi)
 
 

@@ -23,7 +23,7 @@ from a grid and are refined by ``scipy.optimize.least_squares`` on the concentra
 from __future__ import annotations
 
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 from scipy import optimize, signal
@@ -39,6 +39,7 @@ __all__ = [
     "Surrogate",
     "fit_model",
     "lowpass2",
+    "sensor_lowpass",
     "shift_columns",
 ]
 
@@ -87,6 +88,17 @@ def lowpass2(z: np.ndarray, fc: float, zeta: float, fs: float, axis: int = 0) ->
     w = 2 * np.pi * fc
     b, a = signal.bilinear([w * w], [1.0, 2 * zeta * w, w * w], fs)
     return signal.lfilter(b, a, z, axis=axis)
+
+
+def sensor_lowpass(z: np.ndarray, cutoff_hz: float, fs: float, axis: int = 0) -> np.ndarray:
+    """The force channel's 2nd-order Butterworth low-pass (causal), started at ``z``'s first value.
+
+    Starting from the first sample (not from zero) matches a sensor that was at rest on that
+    value before the record: no start-up step the data lack.
+    """
+    b, a = signal.butter(2, cutoff_hz, fs=fs)
+    z0 = np.take(z, [0], axis=axis)
+    return signal.lfilter(b, a, z - z0, axis=axis) + z0
 
 
 def shift_columns(t: np.ndarray, z: np.ndarray, delay: float) -> np.ndarray:
@@ -180,8 +192,7 @@ def _columns(tr: PreparedTrial, model: tuple[Surrogate, ...], theta: dict[str, f
     if "channel_delay" in names:
         phi = shift_columns(tr.t_s, phi, theta["channel_delay.delay_s"])
     if "force_sensor_bandwidth" in names:
-        b, a = signal.butter(2, theta["force_sensor_bandwidth.cutoff_hz"], fs=tr.fs_hz)
-        phi = signal.lfilter(b, a, phi - phi[0], axis=0) + phi[0]
+        phi = sensor_lowpass(phi, theta["force_sensor_bandwidth.cutoff_hz"], tr.fs_hz, axis=0)
     return phi
 
 
@@ -250,7 +261,6 @@ class FittedModel:
         predictions: per trial, (n,) N·m model torque in the scoring band.
         residuals: per trial, (n,) N·m measured minus model torque in the scoring band.
         n_params: free parameters in all (linear per trial plus shared nonlinear).
-        train_rss: N·m², residual sum of squares over the training parts.
     """
 
     effects: tuple[str, ...]
@@ -260,8 +270,6 @@ class FittedModel:
     predictions: tuple[np.ndarray, ...]
     residuals: tuple[np.ndarray, ...]
     n_params: int
-    train_rss: float
-    extra: dict = field(default_factory=dict)
 
 
 def _linear_names(model: tuple[Surrogate, ...]) -> tuple[str, ...]:
@@ -388,7 +396,6 @@ def fit_model(
         predictions=tuple(y - r for y, r in zip(y_band, res, strict=True)),
         residuals=tuple(res),
         n_params=n_lin * len(trials) + len(free),
-        train_rss=float(sum(np.sum(r[tr.train] ** 2) for tr, r in zip(trials, res, strict=True))),
     )
 
 
