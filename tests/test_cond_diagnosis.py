@@ -18,8 +18,9 @@ from armlab.config.schema import ExperimentConfig
 from armlab.diagnosis.cond_data import prepare_cond
 from armlab.diagnosis.cond_diagnose import cond_candidates, diagnose_cond
 from armlab.diagnosis.cond_models import COND_FAMILY, COND_SURROGATES, cond_columns
-from armlab.diagnosis.cond_referee import COND_CLASSES, cond_expected_verdict, make_cond_dataset
+from armlab.diagnosis.cond_referee import COND_CLASSES, make_cond_dataset
 from armlab.diagnosis.joint_models import fit_model
+from armlab.diagnosis.referee import expected_verdict
 from armlab.errors import ConfigError, DataError
 from armlab.protocols.conditioning_window import simulate_protocol
 
@@ -171,8 +172,8 @@ def test_referee_dataset_hides_the_truth(tmp_path):
     assert set(trials.channels) == {"hand_pos", "hand_force"}
     assert "ground_truth" not in trials.attrs
     assert ds.enr > 0 and ds.truth["effect_rms_Nm"] >= ds.truth["unabsorbed_effect_rms_Nm"]
-    assert cond_expected_verdict("left_out:reflex") == {"unknown"}
-    assert cond_expected_verdict("none") == {"none"}
+    assert expected_verdict("left_out:reflex", COND_CLASSES) == {"unknown"}
+    assert expected_verdict("none", COND_CLASSES) == {"none"}
     assert len(COND_CLASSES) >= 9
 
 

@@ -121,9 +121,8 @@ def _identify(cs: CondSet, target_rows: np.ndarray) -> list[dict]:
     return out
 
 
-def _stage(cs: CondSet, y: np.ndarray, model: FittedModel, measured_ident: list[dict]) -> dict:
+def _stage(cs: CondSet, y: np.ndarray, model: FittedModel, measured_ident: list[dict], floor: float) -> dict:
     gap, _, _ = held_out_gap(model, (cs,), [y])
-    floor = float(np.sum(cs.row_noise_var[cs.held])) / float(np.sum(y[cs.held] ** 2))
     sim_ident = _identify(cs, model.predictions[0])
     bias = [
         {"t_obs_s": m["t_obs_s"], **{k: m[k] - s[k] for k in PARAM_NAMES}, "measured": m, "simulated": s}
@@ -168,7 +167,7 @@ def diagnose_cond(trials, cfg: DiagnosisConfig) -> tuple[dict, dict]:
         family=COND_FAMILY,
     )
     measured_ident = _identify(cs, y)
-    stages = [_stage(cs, y, m, measured_ident) for m in sel.stages]
+    stages = [_stage(cs, y, m, measured_ident, floor) for m in sel.stages]
     strip = [[{k: v for k, v in e.items() if k != "model"} for e in r] for r in sel.rankings]
     results = {
         "protocol": "conditioning_window",

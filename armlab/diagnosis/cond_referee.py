@@ -21,7 +21,6 @@ see.
 
 from __future__ import annotations
 
-import math
 from dataclasses import replace
 from pathlib import Path
 
@@ -29,11 +28,10 @@ import numpy as np
 
 from armlab.config.diagnosis import DiagnosisConfig, RefereeConfig
 from armlab.config.effects import EFFECTS, EffectsConfig
-from armlab.diagnosis.referee import Dataset
+from armlab.diagnosis.referee import Dataset, log_uniform
 
 __all__ = [
     "COND_CLASSES",
-    "cond_expected_verdict",
     "make_cond_dataset",
 ]
 
@@ -60,20 +58,6 @@ COND_CLASSES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
 }
 
 
-def cond_expected_verdict(cls: str) -> set[str]:
-    """The verdict a perfect diagnoser gives for a class (as a set of names)."""
-    hidden, excluded = COND_CLASSES[cls]
-    if not hidden:
-        return {"none"}
-    if excluded:
-        return {"unknown"}
-    return set(hidden)
-
-
-def _draw(rng, lo, hi) -> float:
-    return float(math.exp(rng.uniform(math.log(lo), math.log(hi))))
-
-
 def _configs(hidden: tuple[str, ...], rng, ref: RefereeConfig):
     """(with effects, without effects) experiment configs and the drawn parameters."""
     from armlab.config.schema import ExperimentConfig
@@ -97,7 +81,7 @@ def _configs(hidden: tuple[str, ...], rng, ref: RefereeConfig):
     params: dict[str, dict] = {}
     effects = EffectsConfig()
     for name in hidden:
-        values = {k: _draw(rng, lo, hi) for k, (lo, hi) in _MAGNITUDES[name].items()}
+        values = {k: log_uniform(rng, lo, hi) for k, (lo, hi) in _MAGNITUDES[name].items()}
         params[name] = values
         if name == "reflex":
             g = values["gain_scale"]

@@ -32,6 +32,7 @@ __all__ = [
     "JOINT_CLASSES",
     "Dataset",
     "expected_verdict",
+    "log_uniform",
     "make_dataset",
     "score_case",
 ]
@@ -63,9 +64,13 @@ JOINT_CLASSES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
 }
 
 
-def expected_verdict(cls: str) -> set[str]:
-    """The verdict a perfect diagnoser gives for a class (as a set of names)."""
-    hidden, excluded = JOINT_CLASSES[cls]
+def expected_verdict(cls: str, classes: dict | None = None) -> set[str]:
+    """The verdict a perfect diagnoser gives for a class (as a set of names).
+
+    ``classes``: the protocol's class table, name -> (hidden effects, excluded candidates)
+    (default: :data:`JOINT_CLASSES`).
+    """
+    hidden, excluded = (JOINT_CLASSES if classes is None else classes)[cls]
     if not hidden:
         return {"none"}
     if excluded:
@@ -84,7 +89,8 @@ class Dataset:
     enr: float
 
 
-def _uniform_log(rng, lo, hi):
+def log_uniform(rng: np.random.Generator, lo: float, hi: float) -> float:
+    """One draw, log-uniform on [lo, hi] (the referees' effect magnitudes)."""
     return float(math.exp(rng.uniform(math.log(lo), math.log(hi))))
 
 
@@ -92,7 +98,7 @@ def _effects_for(hidden: tuple[str, ...], rng) -> tuple[EffectsConfig, dict]:
     cfg = EffectsConfig()
     params = {}
     for name in hidden:
-        values = {k: _uniform_log(rng, lo, hi) for k, (lo, hi) in _MAGNITUDES[name].items()}
+        values = {k: log_uniform(rng, lo, hi) for k, (lo, hi) in _MAGNITUDES[name].items()}
         values.update(_FIXED.get(name, {}))
         setattr(cfg, name, EFFECTS[name](**values))
         params[name] = values

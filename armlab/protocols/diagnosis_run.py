@@ -99,20 +99,20 @@ def run_diagnosis(
 
 
 def _referee(protocol: str):
-    """(classes, dataset maker, expected verdict) of a protocol's referee."""
+    """(classes, dataset maker) of a protocol's referee."""
     if protocol == "conditioning_window":
-        from armlab.diagnosis.cond_referee import COND_CLASSES, cond_expected_verdict, make_cond_dataset
+        from armlab.diagnosis.cond_referee import COND_CLASSES, make_cond_dataset
 
-        return COND_CLASSES, make_cond_dataset, cond_expected_verdict
-    from armlab.diagnosis.referee import JOINT_CLASSES, expected_verdict, make_dataset
+        return COND_CLASSES, make_cond_dataset
+    from armlab.diagnosis.referee import JOINT_CLASSES, make_dataset
 
-    return JOINT_CLASSES, make_dataset, expected_verdict
+    return JOINT_CLASSES, make_dataset
 
 
 def _one_case(cls: str, rep: int, ref: RefereeConfig, diag_cfg: DiagnosisConfig, root: Path) -> dict:
-    from armlab.diagnosis.referee import score_case
+    from armlab.diagnosis.referee import expected_verdict, score_case
 
-    classes, make, expected = _referee(ref.protocol)
+    classes, make = _referee(ref.protocol)
     folder = root / "datasets" / f"{cls.replace(':', '-').replace('+', '-')}_{rep:02d}"
     ds = make(cls, rep, ref, diag_cfg, folder / "trials")
     write_json(folder / "truth.json", ds.truth)
@@ -122,7 +122,7 @@ def _one_case(cls: str, rep: int, ref: RefereeConfig, diag_cfg: DiagnosisConfig,
     results, _ = run_diagnoser(folder / "trials", ref.protocol, cfg)
     seconds = time.perf_counter() - t0
     write_json(folder / "results.json", results)
-    score = score_case(cls, results, expected(cls))
+    score = score_case(cls, results, expected_verdict(cls, classes))
     return {**score, "replicate": rep, "enr": ds.enr, "seconds": seconds, "truth": ds.truth}
 
 
