@@ -10,6 +10,9 @@ from __future__ import annotations
 import numpy as np
 from scipy import signal
 
+from armlab.estimation.frf import estimate_frf
+from armlab.estimation.levy import LevyStructure, levy_fit
+
 __all__ = [
     "BANDS_HZ",
     "WINDOWS_MS",
@@ -24,6 +27,7 @@ __all__ = [
 BANDS_HZ = ((0.0, 2.0), (2.0, 8.0), (8.0, 20.0), (20.0, 40.0))
 #: ms, windows after perturbation onset (issue 5).
 WINDOWS_MS = ((0, 20), (20, 60), (60, 120), (120, 250), (250, 400))
+_IMPEDANCE = LevyStructure(num_powers=(0, 1, 2), den_powers=(), name="I s² + B s + K")
 
 
 def _held(trials, arrays):
@@ -41,9 +45,11 @@ def band_breakdown(trials, y_band, residuals, noise) -> list[dict]:
     out = []
     for lo, hi in BANDS_HZ:
         sel = (f >= lo) & (f < hi)
-        meas = float(np.trapezoid(py[sel], f[sel])) if sel.sum() > 1 else float(np.sum(py[sel]))
-        res = float(np.trapezoid(pr[sel], f[sel])) if sel.sum() > 1 else float(np.sum(pr[sel]))
-        nse = float(np.trapezoid(pn[sel], f[sel])) if sel.sum() > 1 else float(np.sum(pn[sel]))
+
+        def power(p, sel=sel):
+            return float(np.trapezoid(p[sel], f[sel])) if sel.sum() > 1 else float(np.sum(p[sel]))
+
+        meas, res, nse = power(py), power(pr), power(pn)
         out.append(
             {
                 "band_hz": [lo, hi],
@@ -144,16 +150,14 @@ def residual_tests(trials, residuals, *, max_lag_s: float = 0.25, min_lag_s: flo
 def frf_parameters(trial, torque: np.ndarray, *, band_hz=(1.0, 20.0), nperseg: int = 1024) -> dict:
     """I, B, K from the position→torque frequency response in a band (the protocol's own FRF fit).
 
-    ``Z(f) = -S_xy / S_xx`` (torque resists the motion) and ``Re Z = K - I·ω²``, ``Im Z = B·ω``
-    by least squares over the band. Run on measured and on simulated torque, the difference is
-    the bias a model error leaves in the identified parameters.
+    The impedance ``Z = -torque/position`` (torque resists the motion) by the project's Welch
+    estimate (:func:`armlab.estimation.frf.estimate_frf`, half-overlapping segments), then Levy's
+    least squares of ``K + B·s + I·s²`` over the band, the integer fit of ``armlab fit-joint``
+    (:mod:`armlab.protocols.joint_frf`). Run on measured and on simulated torque, the difference
+    is the bias a model error leaves in the identified parameters.
     """
-    fs = trial.fs_hz
-    f, sxy = signal.csd(trial.x, torque, fs=fs, nperseg=min(nperseg, trial.x.size))
-    _, sxx = signal.welch(trial.x, fs=fs, nperseg=min(nperseg, trial.x.size))
-    sel = (f >= band_hz[0]) & (f <= band_hz[1])
-    z = -sxy[sel] / sxx[sel]
-    w = 2 * np.pi * f[sel]
-    kb = np.linalg.lstsq(np.c_[np.ones_like(w), -(w**2)], z.real, rcond=None)[0]
-    b = float(np.sum(z.imag * w) / np.sum(w * w))
-    return {"I": float(kb[1]), "B": b, "K": float(kb[0])}
+    z = estimate_frf(
+        trial.x, -np.asarray(torque, float), trial.fs_hz, window_len=min(nperseg, trial.x.size), overlap=0.5
+    ).band(*band_hz)
+    b = levy_fit(z.f_hz, z.G, _IMPEDANCE, 1.0).model.b  # ascending powers of s: K, B, I
+    return {"I": float(b[2]), "B": float(b[1]), "K": float(b[0])}
