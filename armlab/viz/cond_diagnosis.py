@@ -13,11 +13,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from armlab.errors import DataError
-from armlab.viz._paths import fresh_path
+from armlab.viz._paths import fresh_path, save_png
 
 __all__ = ["cond_diagnosis_figures", "cond_diagnosis_recording"]
 
@@ -28,13 +27,6 @@ _TIMELINE = "time_after_onset"
 def _per_trial(group: Mapping[str, Any], key: str) -> np.ndarray:
     cs = group["set"]
     return np.asarray(group[key], float).reshape(cs.n_trials, cs.n_window, 2)
-
-
-def _save(fig: Figure, path: Path) -> Path:
-    p = fresh_path(path, ".png")
-    FigureCanvasAgg(fig)
-    fig.savefig(p, dpi=110)
-    return p
 
 
 def cond_diagnosis_figures(
@@ -68,7 +60,7 @@ def cond_diagnosis_figures(
     axes[0, 0].legend(fontsize=8)
     fig.suptitle(f"verdict: {', '.join(results['verdict'])}")
     fig.tight_layout()
-    paths = [_save(fig, Path(out) / "diagnosis_overlay.png")]
+    paths = [save_png(fig, Path(out) / "diagnosis_overlay.png")]
 
     stages = results["how_far"]
     fig = Figure(figsize=(8, 3.8))
@@ -91,7 +83,7 @@ def cond_diagnosis_figures(
     ax.set_yscale("log")
     ax.legend(fontsize=8)
     fig.tight_layout()
-    paths.append(_save(fig, Path(out) / "diagnosis_windows.png"))
+    paths.append(save_png(fig, Path(out) / "diagnosis_windows.png"))
     return paths
 
 

@@ -32,11 +32,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from armlab.errors import DataError
-from armlab.viz._paths import fresh_path
+from armlab.viz._paths import fresh_path, save_png
 
 __all__ = [
     "diagnosis_figures",
@@ -83,14 +82,6 @@ def _grid(n: int, width: float, height: float) -> tuple[Figure, np.ndarray]:
     return fig, axes
 
 
-def _save(fig: Figure, path: Path) -> Path:
-    p = fresh_path(path, ".png")
-    FigureCanvasAgg(fig)
-    with open(p, "xb") as fh:
-        fig.savefig(fh, format="png")
-    return p
-
-
 def _pct(values: Sequence[Any]) -> np.ndarray:
     """Gap fractions as % (NaN where missing), clipped below for the log axis."""
     v = np.array([np.nan if x is None else float(x) for x in values], dtype=float) * 100.0
@@ -123,7 +114,7 @@ def _gap_figure(groups, key: str, span_key: str, unit: str, title: str, path: Pa
         ax.grid(True, axis="y", which="both", alpha=0.3)
         ax.legend(fontsize=7)
     fig.suptitle(title)
-    return _save(fig, path)
+    return save_png(fig, path)
 
 
 def _correlation_figure(groups, path: Path) -> Path:
@@ -162,7 +153,7 @@ def _correlation_figure(groups, path: Path) -> Path:
         ax_c.set_xlabel("lag (ms; > 0: the residual follows the velocity)")
         ax_c.set_title(f"{label}: residual–velocity cross-correlation", fontsize=9)
     fig.suptitle("Residual tests on the held-out parts")
-    return _save(fig, path)
+    return save_png(fig, path)
 
 
 def _held_window(tr) -> np.ndarray:
@@ -198,7 +189,7 @@ def _overlay_figure(groups, path: Path) -> Path:
             ax.grid(True, alpha=0.3)
             ax.legend(fontsize=7)
     fig.suptitle("Held-out torque: measured, nominal simulation, corrected simulation")
-    return _save(fig, path)
+    return save_png(fig, path)
 
 
 def _vaf_figure(groups, path: Path) -> Path:
@@ -231,7 +222,7 @@ def _vaf_figure(groups, path: Path) -> Path:
     ax.grid(True, axis="y", alpha=0.3)
     ax.legend(fontsize=7, loc="lower right")
     fig.suptitle("Held-out VAF per trial, nominal and after each added effect", fontsize=10)
-    return _save(fig, path)
+    return save_png(fig, path)
 
 
 def diagnosis_figures(

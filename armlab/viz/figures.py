@@ -23,7 +23,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from armlab.errors import ConfigError, DataError
-from armlab.viz._paths import fresh_path
+from armlab.viz._paths import save_png
 
 __all__ = [
     "plot_window_sweep",
@@ -95,14 +95,6 @@ def _new_figure(n_rows: int, height_per_row: float, width: float = 9.5) -> tuple
     FigureCanvasAgg(fig)
     axes = np.atleast_1d(fig.subplots(n_rows, 1, sharex=True))
     return fig, axes
-
-
-def _save(fig: Figure, path: str | Path) -> Path:
-    p = fresh_path(path, ".png")
-    # "xb": never overwrite, even if a file appeared since the check.
-    with open(p, "xb") as fh:
-        fig.savefig(fh, format="png", dpi=DPI)
-    return p
 
 
 def _threshold_lines(axes: np.ndarray, results: Mapping[str, Any], model: str | None) -> None:
@@ -213,7 +205,7 @@ def plot_window_sweep(
     fig_no = "Fig. 4" if model == "full" else "Fig. 5"
     what = "full model (K, D, ξ estimated)" if model == "full" else "reduced model (ξ fixed)"
     fig.suptitle(f"{fig_no}: estimates over T_obs, {what}", fontsize=10)
-    return _save(fig, path)
+    return save_png(fig, path)
 
 
 def plot_validation(series: Mapping[str, Any], path: str | Path) -> Path:
@@ -268,7 +260,7 @@ def plot_validation(series: Mapping[str, Any], path: str | Path) -> Path:
     axes[0].legend(**_OUTSIDE)
     axes[-1].set_xlabel("t − t_p [ms]")
     fig.suptitle("Fig. 6: prediction of Δτ_ext for a trial not used in the training set", fontsize=10)
-    return _save(fig, path)
+    return save_png(fig, path)
 
 
 def plot_error_vs_window(results: Mapping[str, Any], path: str | Path) -> Path:
@@ -314,4 +306,4 @@ def plot_error_vs_window(results: Mapping[str, Any], path: str | Path) -> Path:
         ax.legend(**_OUTSIDE)
     axes[-1].set_xlabel("length of the observation interval T_obs [ms]")
     fig.suptitle("Relative estimation error against the simulation's ground truth", fontsize=10)
-    return _save(fig, path)
+    return save_png(fig, path)

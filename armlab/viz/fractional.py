@@ -40,7 +40,7 @@ from matplotlib.figure import Figure
 from matplotlib.ticker import FuncFormatter, LogLocator, NullFormatter
 
 from armlab.errors import ConfigError, DataError
-from armlab.viz._paths import fresh_path
+from armlab.viz._paths import save_png
 
 __all__ = [
     "plot_bode_fits",
@@ -95,14 +95,6 @@ def _model_label(key: str) -> str:
     if key == FFE:
         return "fractional five-element"
     return f"({key})" if key.isdigit() else key
-
-
-def _save(fig: Figure, path: str | Path) -> Path:
-    p = fresh_path(path, ".png")
-    # "xb": never overwrite, even if a file appeared since the check.
-    with open(p, "xb") as fh:
-        fig.savefig(fh, format="png", dpi=DPI)
-    return p
 
 
 def _response(series: Mapping[str, Any], key: str, n: int) -> np.ndarray | None:
@@ -258,7 +250,7 @@ def plot_bode_fits(series: Mapping[str, Any], results: Mapping[str, Any] | None,
     if truth is not None:
         _bode_line(ax_mag, ax_ph, f, truth, "ground truth (simulation)", color="k", ls="--", lw=1.3)
     ax_mag.legend(**_OUTSIDE)
-    return _save(fig, path)
+    return save_png(fig, path)
 
 
 def plot_bode_literature(
@@ -301,7 +293,7 @@ def plot_bode_literature(
         style.update(_LIT_STYLES.get(name, dict(ls="-.")))
         _bode_line(ax_mag, ax_ph, f, literature[name], label, **style)
     ax_mag.legend(**_OUTSIDE)
-    return _save(fig, path)
+    return save_png(fig, path)
 
 
 def plot_time_overlay(
@@ -382,7 +374,7 @@ def plot_time_overlay(
         f"({t[0]:.1f}–{t[keep][-1]:.1f} s of the trial)",
         fontsize=10,
     )
-    return _save(fig, path)
+    return save_png(fig, path)
 
 
 # ---------------------------------------------------------------------------------------------

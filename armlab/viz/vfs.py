@@ -16,12 +16,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from armlab.data.trial import TrialSet
 from armlab.errors import DataError
-from armlab.viz._paths import fresh_path
+from armlab.viz._paths import fresh_path, save_png
 
 __all__ = ["format_vfs_tables", "plot_vfs_figures", "write_vfs_recording"]
 
@@ -97,14 +96,6 @@ def format_vfs_tables(results: Mapping[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def _save(fig: Figure, path: Path) -> Path:
-    p = fresh_path(path, ".png")
-    FigureCanvasAgg(fig)
-    with open(p, "xb") as fh:
-        fig.savefig(fh, format="png", dpi=_DPI)
-    return p
-
-
 def _fig4(series: Mapping[str, Any], path: Path) -> Path | None:
     fx = series.get("fixture")
     if not fx:
@@ -128,7 +119,7 @@ def _fig4(series: Mapping[str, Any], path: Path) -> Path | None:
     axes[2, 0].legend(fontsize=8)
     fig.suptitle(f"Fig. 4: {fx['stiffness'][j]} / {fx['payload'][j]}, smoothed identification signals")
     fig.tight_layout()
-    return _save(fig, path)
+    return save_png(fig, path)
 
 
 def _fig5(results: Mapping[str, Any], path: Path) -> Path | None:
@@ -153,7 +144,7 @@ def _fig5(results: Mapping[str, Any], path: Path) -> Path | None:
     axes[0].legend(fontsize=8)
     fig.suptitle("Fig. 5: identified vs theoretical (Table I) parameters")
     fig.tight_layout()
-    return _save(fig, path)
+    return save_png(fig, path)
 
 
 def plot_vfs_figures(
