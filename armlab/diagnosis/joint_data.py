@@ -39,7 +39,7 @@ import numpy as np
 from scipy import signal
 
 from armlab.errors import DataError
-from armlab.estimation.processing import differentiate
+from armlab.estimation.processing import differentiate, lowpass_zero_phase
 
 __all__ = [
     "NoiseFloor",
@@ -96,8 +96,8 @@ class PreparedTrial:
 
 
 def _zero_phase_lowpass(z: np.ndarray, fc: float, fs: float, order: int = 4, axis: int = -1) -> np.ndarray:
-    sos = signal.butter(order, fc, fs=fs, output="sos")
-    return signal.sosfiltfilt(sos, z, axis=axis, padtype="even")
+    """The zero-phase low-pass with even edge padding (see ``test_first_and_last_samples...``)."""
+    return lowpass_zero_phase(z, fs, fc, order, axis=axis, padtype="even")
 
 
 def _tonic_torque(position: np.ndarray, torque: np.ndarray, slow_hz: float, fs: float) -> np.ndarray:

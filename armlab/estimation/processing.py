@@ -105,7 +105,7 @@ class JointSignals:
 
 
 def lowpass_zero_phase(
-    x: np.ndarray, fs_hz: float, cutoff_hz: float | None, order: int = 4, axis: int = -2
+    x: np.ndarray, fs_hz: float, cutoff_hz: float | None, order: int = 4, axis: int = -2, padtype: str = "odd"
 ) -> np.ndarray:
     """Phase-free Butterworth low-pass (``sosfiltfilt``), Sec. IV-C of the conditioning paper.
 
@@ -116,6 +116,9 @@ def lowpass_zero_phase(
             copy of ``x`` unchanged.
         order: Butterworth order of the one-way filter.
         axis: time axis.
+        padtype: ``sosfiltfilt``'s edge extension: ``"odd"`` pins the end samples to their raw
+            values; ``"even"`` mirrors them, so an end sample's noise is band-limited like the
+            others' (the diagnosis's torque).
 
     Returns:
         Filtered array, same shape as ``x``.
@@ -130,7 +133,7 @@ def lowpass_zero_phase(
         )
     sos = signal.butter(int(order), cutoff_hz, btype="low", fs=fs_hz, output="sos")
     try:
-        return signal.sosfiltfilt(sos, x, axis=axis)
+        return signal.sosfiltfilt(sos, x, axis=axis, padtype=padtype)
     except ValueError as err:
         raise DataError(
             f"signal too short for an order-{order} zero-phase filter along axis {axis} "
