@@ -72,7 +72,7 @@ def _table_names(section: str) -> list[str]:
 
 def test_pooled_report_states_verdict_ranking_and_floor(pooled):
     # the synthetic joint has a reflex first (largest), then friction
-    assert pooled["verdict"][0] == "reflex"
+    assert pooled["verdict"] == ["reflex", "joint_friction"]
     text = format_report(pooled, data_path="/data/ankle", figures=FIGURES)
     summary = _section(text, "## Summary", "## Where")
     assert "Verdict: the gap is explained by a stretch reflex (`reflex`)" in summary

@@ -27,11 +27,13 @@ from conftest import (
     reflex_torque,
     slow_activation,
 )
+from scipy import signal
 
-from armlab.config.effects import EFFECTS, effect_names
+from armlab.config.diagnosis import DiagnosisConfig
+from armlab.config.effects import EFFECTS, PayloadMass, effect_names
 from armlab.diagnosis import joint_models as jm
 from armlab.diagnosis.attribution import held_out_gap
-from armlab.diagnosis.joint_data import noise_floor
+from armlab.diagnosis.joint_data import highpass_sos, noise_floor
 from armlab.diagnosis.joint_models import JOINT_SURROGATES, fit_model
 
 S = JOINT_SURROGATES
@@ -81,8 +83,11 @@ def test_nominal_fit_recovers_inertia_damping_stiffness():
     for beta in nominal.beta:
         np.testing.assert_allclose(beta, [-JOINT_I, -JOINT_B, -JOINT_K], rtol=0.02)
     assert nominal.n_params == 3 * len(trials)
-    for y, p, r in zip(y_band, nominal.predictions, nominal.residuals, strict=True):
-        np.testing.assert_allclose(p + r, y)
+    # the prediction is the fitted impedance acting on the band-limited motion (scoring band)
+    for tr, beta, p in zip(trials, nominal.beta, nominal.predictions, strict=True):
+        hp = highpass_sos(tr.fs_hz, DiagnosisConfig().highpass_hz)  # conftest.prepared's default
+        motion = np.stack([signal.sosfiltfilt(hp, z) for z in (tr.a, tr.v, tr.x)], axis=1)
+        np.testing.assert_allclose(p, motion @ beta, atol=1e-9 * np.abs(p).max())
 
 
 @pytest.mark.parametrize("direction", [1.0, -1.0])
@@ -179,10 +184,18 @@ def test_cocontraction_recovers_the_stiffness_and_damping_slopes():
 
 
 def test_payload_mass_is_absorbed_by_the_nominal_inertia():
+    # a 0.2 kg handle 0.1 m from the axis (the catalogue default) adds m·r² = 0.002 kg·m² to the
+    # joint inertia: the nominal fit takes it up in I, and the surrogate adds nothing to fit
+    payload = PayloadMass()
+    extra_i = payload.mass_kg * payload.lever_m**2
     rng = np.random.default_rng(2)
-    records = joint_trials(prbs_position(rng, 10.0), nominal_torque, rng, noise_std=0.05)
+    records = joint_trials(
+        prbs_position(rng, 10.0), lambda x: nominal_torque(x, I=JOINT_I + extra_i), rng, noise_std=0.05
+    )
     trials, hp, y_band = prepared(records)
     nominal = fit_model(trials, y_band, (), hp)
+    # within 2 %, the nominal-fit tolerance above (0.05 N·m noise on ~3 N·m of torque)
+    np.testing.assert_allclose(-_beta(nominal, "I"), JOINT_I + extra_i, rtol=0.02)
     fm = fit_model(trials, y_band, (S["payload_mass"],), hp)
     assert fm.linear_names == nominal.linear_names and fm.n_params == nominal.n_params
     np.testing.assert_allclose(fm.beta, nominal.beta)

@@ -117,10 +117,11 @@ def test_band_breakdown_puts_a_band_limited_residual_in_its_band(data):
     gaps = [b["gap"] for b in bands]
     assert gaps[2] == pytest.approx(1.0, abs=0.05)  # 8-20 Hz: all of the measured power there (Welch leakage)
     assert max(gaps[0], gaps[1], gaps[3]) < 0.02
-    whole = band_breakdown(trials, y_band, y_band, noise)
-    for b in whole:
-        assert b["gap"] == pytest.approx(1.0)
-        assert b["residual_power"] == pytest.approx(b["measured_power"])
+    # half the measured torque as the residual: a quarter of its power in every band
+    half = band_breakdown(trials, y_band, [0.5 * y for y in y_band], noise)
+    for b in half:
+        assert b["gap"] == pytest.approx(0.25)
+        assert b["residual_power"] == pytest.approx(0.25 * b["measured_power"])
         assert 0 < b["floor"] < 1  # noise is a small part of the measured torque in every band
 
 
