@@ -174,6 +174,8 @@ def test_referee_dataset_hides_the_truth(tmp_path):
     assert ds.enr > 0 and ds.truth["effect_rms_Nm"] >= ds.truth["unabsorbed_effect_rms_Nm"]
     assert expected_verdict("left_out:reflex", COND_CLASSES) == {"unknown"}
     assert expected_verdict("none", COND_CLASSES) == {"none"}
+    with pytest.raises(FileExistsError, match="new folder"):  # refused before simulating
+        make_cond_dataset("cuff_compliance", 0, ref, DiagnosisConfig(), tmp_path / "d")
     assert len(COND_CLASSES) >= 9
 
 

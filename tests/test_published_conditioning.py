@@ -28,14 +28,15 @@ def gap(cfg):
 
 @pytest.fixture(scope="module")
 def diagnosis(cfg):
+    catalogue = {v.name: v for v in pc.candidate_variants(cfg)}
     variants = [
-        pc.Variant(name="sensors_ideal", effect="sensors", description="ideal sensors",
-                   set_values=(("sensors.preset", "ideal"),)),
+        # two variants that move the thresholds in opposite directions (quick mode, summed
+        # distance to the paper's: 190 ms with reflexes off, 250 nominal, 370 with a rigid cuff)
+        catalogue["reflex_off"],
+        catalogue["cuff_rigid"],
         # not physical: the protocol is simulated again with the same seed, so must repeat nominal
         pc.Variant(name="repeat", effect="none", description="same physics, no table",
                    set_values=(("output.print_table", False),)),
-        pc.Variant(name="lowpass_40hz", effect="filter", description="low-pass 40 Hz",
-                   set_values=(("estimator.lowpass_hz", 40.0),)),
     ]  # fmt: skip
     return pc.diagnose_thresholds(cfg, variants, quick=True)
 
@@ -60,10 +61,8 @@ def test_threshold_gap_reports_the_published_values(gap):
     assert paper["K_pd"] == PAPER_THRESHOLDS_S["K_pd_after_s"]
     for c in pc.CRITERIA:
         g = gap["criteria"][c]
-        if g["reached"]:
-            assert g["gap_ms"] == pytest.approx((g["simulated_s"] - g["paper_s"]) * 1e3)
-        else:
-            assert g["gap_ms"] is None and "not reached within the windows up to 500 ms" in g["text"]
+        assert g["reached"], c  # the nominal lab reaches all three within the quick windows
+        assert g["gap_ms"] == pytest.approx((g["simulated_s"] - g["paper_s"]) * 1e3)
 
 
 def test_distance_sums_scored_gaps_and_penalises_unreached():
@@ -86,15 +85,18 @@ def test_ranking_puts_the_smallest_distance_first_and_failures_last():
 
 
 def test_variants_change_the_config_as_documented(cfg):
+    names = [v.name for v in pc.candidate_variants(cfg)]
+    assert 0 < len(names) <= 12 and len(set(names)) == len(names)  # names are unique
     variants = {v.name: v for v in pc.candidate_variants(cfg)}
-    assert 0 < len(variants) <= 12  # names are unique
     for v in variants.values():
         assert v.apply(cfg) != cfg, v.name
     gain = variants["reflex_gain_x2"].apply(cfg).reflex
     assert gain.stretch_gain == 2 * cfg.reflex.stretch_gain
     assert gain.spinal_gain == 2 * cfg.reflex.spinal_gain
     assert variants["reflex_latency_25ms"].apply(cfg).reflex.stretch_latency_s == 0.025
-    assert variants["cuff_stiffness_x0.5"].apply(cfg).cuff.stiffness_N_per_m == 1.0e4
+    assert (
+        variants["cuff_stiffness_x0.5"].apply(cfg).cuff.stiffness_N_per_m == 0.5 * cfg.cuff.stiffness_N_per_m
+    )
     # toggles are relative to the nominal: with reflexes off the candidate switches them on
     off = replace(cfg, reflex=replace(cfg.reflex, enabled=False))
     assert "reflex_on" in {v.name for v in pc.candidate_variants(off)}
@@ -125,17 +127,15 @@ def test_diagnosis_is_paired_and_ranked(diagnosis, gap):
     by_name = {e["name"]: e for e in diagnosis["variants"]}
     assert by_name["repeat"]["criteria"] == nominal["criteria"]  # re-simulated: deterministic
     assert by_name["repeat"]["shrink_ms"] == 0.0
+    # ranked by distance: reflexes off closer than the nominal, a rigid cuff farther
+    assert [e["name"] for e in diagnosis["variants"]] == ["reflex_off", "repeat", "cuff_rigid"]
     distances = [e["distance_ms"] for e in diagnosis["variants"]]
-    assert distances == sorted(distances)
+    assert distances[0] < nominal["distance_ms"] < distances[2]
     for e in diagnosis["variants"]:
         assert e["error"] is None
         assert e["shrink_ms"] == pytest.approx(nominal["distance_ms"] - e["distance_ms"])
     verdict = diagnosis["verdict"]
-    best = diagnosis["variants"][0]
-    if best["distance_ms"] < nominal["distance_ms"]:
-        assert verdict["best"] == best["name"] and verdict["best_distance_ms"] == best["distance_ms"]
-    else:
-        assert verdict["best"] is None and "No single change" in verdict["text"]
+    assert verdict["best"] == "reflex_off" and verdict["best_distance_ms"] == distances[0]
 
 
 def test_report_has_every_row_and_the_verdict(diagnosis):

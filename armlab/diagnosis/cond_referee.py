@@ -148,6 +148,8 @@ def make_cond_dataset(
 
     if cls not in COND_CLASSES:
         raise KeyError(f"unknown referee class {cls!r}; valid: {list(COND_CLASSES)}")
+    if folder.exists():  # before any simulation: nothing already written is touched
+        raise FileExistsError(f"{folder} exists; the referee writes every dataset into a new folder")
     rng = np.random.default_rng([ref.seed, 100 + list(COND_CLASSES).index(cls), replicate])
     hidden, _ = COND_CLASSES[cls]
     noisy_cfg, clean_cfg, base_cfg, params = _configs(hidden, rng, ref)

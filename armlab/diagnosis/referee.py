@@ -120,6 +120,8 @@ def make_dataset(
 
     if cls not in JOINT_CLASSES:
         raise KeyError(f"unknown referee class {cls!r}; valid: {list(JOINT_CLASSES)}")
+    if folder.exists():  # before any simulation: nothing already written is touched
+        raise FileExistsError(f"{folder} exists; the referee writes every dataset into a new folder")
     rng = np.random.default_rng([ref.seed, list(JOINT_CLASSES).index(cls), replicate])
     subject = JointSubject(
         inertia_kgm2=float(rng.uniform(0.01, 0.03)),  # kg·m², ankle range (Kearney & Hunter 1990)
