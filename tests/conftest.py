@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+import os
+import subprocess
+import sys
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -159,3 +163,31 @@ def prepared(records, cfg=None, **kw):
     from armlab.diagnosis.diagnose import prepare_scoring
 
     return prepare_scoring(records, cfg or DiagnosisConfig(), **kw)
+
+
+# --- output files ---------------------------------------------------------------------------------
+PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
+
+
+def assert_png(path: Path) -> None:
+    """``path`` is a PNG file with content."""
+    assert path.is_file(), path
+    assert path.read_bytes()[:8] == PNG_MAGIC, path
+    # a blank 120-dpi figure is already several kB; ours has content
+    assert path.stat().st_size > 10_000, path
+
+
+def verify_rrd(path: Path, home: Path) -> None:
+    """``rerun rrd verify`` accepts ``path``; skips without the rerun CLI next to the interpreter.
+
+    ``home``: a private HOME, which keeps the CLI's analytics config out of the user's.
+    """
+    exe = Path(sys.executable).parent / "rerun"
+    if not exe.is_file():
+        pytest.skip("no rerun CLI next to the interpreter; cannot verify the .rrd")
+    env = {**os.environ, "HOME": str(home), "XDG_CONFIG_HOME": str(home / ".config")}
+    subprocess.run([str(exe), "analytics", "disable"], env=env, capture_output=True, timeout=30, check=False)
+    done = subprocess.run(
+        [str(exe), "rrd", "verify", str(path)], env=env, capture_output=True, text=True, timeout=60
+    )
+    assert done.returncode == 0, done.stdout + done.stderr

@@ -2,13 +2,9 @@
 
 from __future__ import annotations
 
-import os
-import subprocess
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
+from conftest import assert_png, verify_rrd
 
 import armlab.viz
 from armlab.data.trial import TrialSet
@@ -21,7 +17,6 @@ from armlab.viz import (
     write_recording,
 )
 
-PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 K_TRUE = [[12.0, 4.0], [4.0, 9.0]]
 D_TRUE = [[1.2, 0.3], [0.3, 0.9]]
 XI_TRUE = [0.391, 0.155, 0.149]
@@ -139,12 +134,6 @@ def _validation_series(n: int = 200) -> dict:
     }
 
 
-def _assert_png(path: Path) -> None:
-    assert path.is_file()
-    assert path.read_bytes()[:8] == PNG_MAGIC
-    assert path.stat().st_size > 10_000  # a blank 120-dpi figure is already several kB; ours has content
-
-
 def test_public_api_resolves():
     for name in armlab.viz.__all__:
         assert getattr(armlab.viz, name) is not None
@@ -154,12 +143,12 @@ def test_public_api_resolves():
 def test_window_sweep_written(tmp_path, model):
     path = plot_window_sweep(_results(), tmp_path / f"fig_{model}.png", model=model)
     assert path == tmp_path / f"fig_{model}.png"
-    _assert_png(path)
+    assert_png(path)
 
 
 def test_validation_and_error_figures_written(tmp_path):
-    _assert_png(plot_validation(_validation_series(), tmp_path / "fig6.png"))
-    _assert_png(plot_error_vs_window(_results(), tmp_path / "errors.png"))
+    assert_png(plot_validation(_validation_series(), tmp_path / "fig6.png"))
+    assert_png(plot_error_vs_window(_results(), tmp_path / "errors.png"))
 
 
 def test_figures_never_overwrite(tmp_path):
@@ -187,26 +176,12 @@ def test_figure_input_errors(tmp_path):
     assert not any(tmp_path.iterdir())
 
 
-def _rerun_cli() -> Path | None:
-    exe = Path(sys.executable).parent / "rerun"
-    return exe if exe.is_file() else None
-
-
 def test_recording_written_and_verified(tmp_path):
     path = write_recording(tmp_path / "run.rrd", _trials(), _results())
     assert path == tmp_path / "run.rrd"
     assert path.stat().st_size > 10_000
     assert view_command(path) == ["rerun", str(path)]
-    exe = _rerun_cli()
-    if exe is None:
-        pytest.skip("no rerun CLI next to the interpreter; cannot verify the .rrd")
-    # A private HOME keeps the CLI's analytics config out of the user's.
-    env = {**os.environ, "HOME": str(tmp_path), "XDG_CONFIG_HOME": str(tmp_path / ".config")}
-    subprocess.run([str(exe), "analytics", "disable"], env=env, capture_output=True, timeout=30, check=False)
-    done = subprocess.run(
-        [str(exe), "rrd", "verify", str(path)], env=env, capture_output=True, text=True, timeout=60
-    )
-    assert done.returncode == 0, done.stdout + done.stderr
+    verify_rrd(path, tmp_path)
 
 
 def test_recording_options_shrink_the_file(tmp_path):

@@ -6,14 +6,13 @@ steps: small, fast, and independent of the shared REKLAB data.
 
 from __future__ import annotations
 
-import os
 import subprocess
 import sys
 from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import JointTrial, nominal_torque, prbs_position, reflex_torque
+from conftest import JointTrial, assert_png, nominal_torque, prbs_position, reflex_torque, verify_rrd
 
 import armlab.viz
 from armlab.config.diagnosis import DiagnosisConfig
@@ -21,7 +20,6 @@ from armlab.diagnosis.diagnose import diagnose_joint
 from armlab.errors import DataError
 from armlab.viz import diagnosis_figures, diagnosis_recording
 
-PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 FIGURES = [
     "gap_by_band.png",
     "gap_by_window.png",
@@ -57,8 +55,7 @@ def per_trial():
 def _check_pngs(paths: list[Path], out: Path) -> None:
     assert paths == [out / name for name in FIGURES]
     for p in paths:
-        data = p.read_bytes()
-        assert data.startswith(PNG_MAGIC) and len(data) > 10_000, p
+        assert_png(p)
 
 
 def test_exported_from_viz():
@@ -95,11 +92,6 @@ def test_figures_never_overwrite_and_check_series(pooled, tmp_path):
         diagnosis_figures({"other": series["all"]}, results, tmp_path / "x")
 
 
-def _rerun_cli() -> Path | None:
-    exe = Path(sys.executable).parent / "rerun"
-    return exe if exe.is_file() else None
-
-
 @pytest.mark.parametrize("mode", ["pooled", "per_trial"])
 def test_recording_written_and_verified(mode, pooled, per_trial, tmp_path):
     _, series = pooled if mode == "pooled" else per_trial
@@ -107,15 +99,7 @@ def test_recording_written_and_verified(mode, pooled, per_trial, tmp_path):
     assert path == tmp_path / "diagnosis.rrd"
     # 2 trials x 2500 samples x 6 series at least 8 B each
     assert path.stat().st_size > 2 * 2500 * 6 * 8
-    exe = _rerun_cli()
-    if exe is None:
-        pytest.skip("no rerun CLI next to the interpreter; cannot verify the .rrd")
-    env = {**os.environ, "HOME": str(tmp_path), "XDG_CONFIG_HOME": str(tmp_path / ".config")}
-    subprocess.run([str(exe), "analytics", "disable"], env=env, capture_output=True, timeout=30, check=False)
-    done = subprocess.run(
-        [str(exe), "rrd", "verify", str(path)], env=env, capture_output=True, text=True, timeout=60
-    )
-    assert done.returncode == 0, done.stdout + done.stderr
+    verify_rrd(path, tmp_path)
 
 
 def test_recording_refuses_overwrite_and_bad_input(pooled, tmp_path):

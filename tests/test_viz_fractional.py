@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import assert_png
 
 import armlab.viz
 from armlab.data.trial import TrialSet
@@ -18,7 +19,6 @@ from armlab.viz import (
     write_fractional_recording,
 )
 
-PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
 L_M = 0.35
 FS_HZ = 2000.0
 PAPER_TABLE_I = {
@@ -157,12 +157,6 @@ def _trials(n_trials: int = 2, n_samples: int = 4000, with_link: bool = True) ->
     )
 
 
-def _assert_png(path: Path) -> None:
-    assert path.is_file()
-    assert path.read_bytes()[:8] == PNG_MAGIC
-    assert path.stat().st_size > 10_000
-
-
 def test_public_api_resolves():
     for name in armlab.viz.__all__:
         assert getattr(armlab.viz, name) is not None
@@ -181,7 +175,7 @@ def test_plots_write_png_and_refuse_overwrite(tmp_path, plot):
     series, results = _series(), _results()
     path = plot(series, results, tmp_path / "fig.png")
     assert path == tmp_path / "fig.png"
-    _assert_png(path)
+    assert_png(path)
     before = path.read_bytes()
     with pytest.raises(DataError, match="fig.png"):
         plot(series, results, path)
@@ -196,10 +190,10 @@ def test_plots_handle_real_data_without_truth(tmp_path):
     series["fits"] = {"27": series["fits"]["27"], "28": None}
     del series["time"]["models"]["A"]
     results = _results(truth=False)
-    _assert_png(plot_bode_fits(series, results, tmp_path / "a.png"))
-    _assert_png(plot_bode_fits(series, None, tmp_path / "b.png"))
-    _assert_png(plot_bode_literature(series, tmp_path / "c.png"))
-    _assert_png(plot_time_overlay(series, tmp_path / "d.png", models=["27", "28"]))
+    assert_png(plot_bode_fits(series, results, tmp_path / "a.png"))
+    assert_png(plot_bode_fits(series, None, tmp_path / "b.png"))
+    assert_png(plot_bode_literature(series, tmp_path / "c.png"))
+    assert_png(plot_time_overlay(series, tmp_path / "d.png", models=["27", "28"]))
 
 
 def test_plots_reject_bad_input(tmp_path):
