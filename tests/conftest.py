@@ -149,6 +149,23 @@ def cocontraction_torque(x: np.ndarray, c: np.ndarray, *, tonic_Nm: float) -> np
     return -(JOINT_I * a + (1.0 + c) * (JOINT_B * v + JOINT_K * x)) + tonic_Nm * (1.0 + c)
 
 
+def reflex_joint_torque(x: np.ndarray) -> np.ndarray:
+    """N·m, the nominal joint plus a 40 ms, gain-2 reflex (a clear but moderate reflex gap)."""
+    return nominal_torque(x) + reflex_torque(x, delay_s=0.04, gain=2.0)
+
+
+def noisy_joint_record(name: str, seed: int, *, reflex_gain: float, coulomb_Nm: float = 0.0, duration_s=10.0):
+    """A 1-DoF joint trial under a smoothed PRBS: nominal + 45 ms reflex + friction + 0.05 N·m noise."""
+    rng = np.random.default_rng(seed)
+    x = prbs_position(rng, duration_s)
+    torque = (
+        nominal_torque(x)
+        + reflex_torque(x, delay_s=0.045, gain=reflex_gain)  # 45 ms latency (Kearney 1997)
+        + friction_torque(x, coulomb=coulomb_Nm)
+    )
+    return JointTrial(name, x, torque + 0.05 * rng.standard_normal(x.size))
+
+
 def joint_trials(x: np.ndarray, torque_fn, rng, *, repeats: int = 2, noise_std: float = 0.15):
     """``repeats`` recordings of one position sequence, each with its own white torque noise."""
     return [

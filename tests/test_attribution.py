@@ -16,7 +16,7 @@ from conftest import (
     nominal_torque,
     prbs_position,
     prepared,
-    reflex_torque,
+    reflex_joint_torque,
 )
 
 from armlab.config.diagnosis import DiagnosisConfig
@@ -52,10 +52,6 @@ def _select(torque_fn, names, *, seed=0, rules=None):
     )
 
 
-def _reflex(x):
-    return nominal_torque(x) + reflex_torque(x, delay_s=0.04, gain=2.0)
-
-
 def test_every_name_in_all_resolves():
     for name in at.__all__:
         assert getattr(at, name) is not None
@@ -83,7 +79,7 @@ def test_noise_alone_gives_none():
 
 
 def test_one_effect_well_above_noise_is_found():
-    sel = _select(_reflex, ["reflex", "joint_friction", "channel_delay"])
+    sel = _select(reflex_joint_torque, ["reflex", "joint_friction", "channel_delay"])
     assert sel.verdict == ["reflex"]
     best = sel.rankings[0][0]
     assert best["name"] == "reflex" and best["delta_bic"] < -_CFG.bic_margin
@@ -96,14 +92,14 @@ def test_one_effect_well_above_noise_is_found():
 
 
 def test_effect_left_out_of_the_candidates_gives_unknown():
-    sel = _select(_reflex, ["joint_friction", "channel_delay"])
+    sel = _select(reflex_joint_torque, ["joint_friction", "channel_delay"])
     assert sel.verdict == ["unknown"]
     assert len(sel.stages) == 1
 
 
 def test_two_effects_are_selected_in_turn():
     def torque(x):
-        return _reflex(x) + friction_torque(x, coulomb=0.3)
+        return reflex_joint_torque(x) + friction_torque(x, coulomb=0.3)
 
     sel = _select(torque, ["reflex", "joint_friction"])
     assert sel.verdict == ["reflex", "joint_friction"]

@@ -8,7 +8,15 @@ import json
 
 import numpy as np
 import pytest
-from conftest import JOINT_B, JOINT_I, JOINT_K, joint_trials, nominal_torque, prbs_position, reflex_torque
+from conftest import (
+    JOINT_B,
+    JOINT_I,
+    JOINT_K,
+    joint_trials,
+    nominal_torque,
+    prbs_position,
+    reflex_joint_torque,
+)
 
 from armlab.config.diagnosis import DiagnosisConfig
 from armlab.diagnosis import diagnose as dg
@@ -20,10 +28,6 @@ from armlab.protocols._files import json_default
 _CANDIDATES = ["reflex", "joint_friction", "channel_delay"]
 
 _NONE_TOL = DiagnosisConfig().for_protocol("joint_1dof").none_tolerance  # 1, of the floor
-
-
-def _reflex(x):
-    return nominal_torque(x) + reflex_torque(x, delay_s=0.04, gain=2.0)
 
 
 def _records(torque_fn, *, seed=0, duration=12.0):
@@ -71,7 +75,7 @@ def test_bad_candidate_lists_are_refused(cfg, message):
 
 @pytest.fixture(scope="module")
 def reflex_results():
-    return diagnose_joint(_records(_reflex), DiagnosisConfig(candidates=_CANDIDATES))
+    return diagnose_joint(_records(reflex_joint_torque), DiagnosisConfig(candidates=_CANDIDATES))
 
 
 def test_effect_well_above_noise_is_named(reflex_results):
@@ -131,7 +135,7 @@ def test_noise_alone_gives_none():
 
 def test_effect_excluded_from_the_candidates_gives_unknown():
     cfg = DiagnosisConfig(candidates=_CANDIDATES, exclude=["reflex"])
-    results, _ = diagnose_joint(_records(_reflex), cfg)
+    results, _ = diagnose_joint(_records(reflex_joint_torque), cfg)
     assert results["verdict"] == ["unknown"]
     assert {e["name"] for e in results["ranking"]} == {"joint_friction", "channel_delay"}
     assert results["settings"]["exclude"] == ["reflex"]
@@ -139,7 +143,7 @@ def test_effect_excluded_from_the_candidates_gives_unknown():
 
 
 def test_per_trial_mode_diagnoses_every_trial_on_its_own():
-    records = _records(_reflex, seed=2)
+    records = _records(reflex_joint_torque, seed=2)
     results, series = diagnose_joint(
         records, DiagnosisConfig(candidates=["reflex", "channel_delay"], per_trial=True)
     )

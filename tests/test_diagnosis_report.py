@@ -11,9 +11,10 @@ import copy
 import json
 import re
 
-import numpy as np
 import pytest
-from conftest import JointTrial, friction_torque, nominal_torque, prbs_position, reflex_torque
+from conftest import (
+    noisy_joint_record,
+)
 
 from armlab.config.diagnosis import DiagnosisConfig
 from armlab.config.effects import EFFECTS
@@ -26,20 +27,11 @@ CANDIDATES = ["reflex", "joint_friction", "channel_delay"]
 FIGURES = ["gap_by_band.png", "time_overlay.png"]
 
 
-def _record(name: str, seed: int, *, reflex_gain: float, coulomb_Nm: float, duration_s: float = 10.0):
-    """A 1-DoF joint under a smoothed PRBS, torque from a known model (conftest) plus noise."""
-    rng = np.random.default_rng(seed)
-    x = prbs_position(rng, duration_s)
-    torque = (
-        nominal_torque(x)
-        + reflex_torque(x, delay_s=0.045, gain=reflex_gain)  # 45 ms latency (Kearney 1997)
-        + friction_torque(x, coulomb=coulomb_Nm)
-    )
-    return JointTrial(name, x, torque + 0.05 * rng.standard_normal(x.size))
-
-
 def _records(reflex_gain=15.0, coulomb_Nm=1.5):
-    return [_record(n, s, reflex_gain=reflex_gain, coulomb_Nm=coulomb_Nm) for n, s in (("a", 1), ("b", 2))]
+    return [
+        noisy_joint_record(n, s, reflex_gain=reflex_gain, coulomb_Nm=coulomb_Nm)
+        for n, s in (("a", 1), ("b", 2))
+    ]
 
 
 @pytest.fixture(scope="module")

@@ -10,9 +10,12 @@ import subprocess
 import sys
 from pathlib import Path
 
-import numpy as np
 import pytest
-from conftest import JointTrial, assert_png, nominal_torque, prbs_position, reflex_torque, verify_rrd
+from conftest import (
+    assert_png,
+    noisy_joint_record,
+    verify_rrd,
+)
 
 import armlab.viz
 from armlab.config.diagnosis import DiagnosisConfig
@@ -29,25 +32,18 @@ FIGURES = [
 ]
 
 
-def _record(name: str, seed: int, duration_s: float = 10.0) -> JointTrial:
-    """A 1-DoF joint under a smoothed PRBS with a 45 ms reflex (conftest model) plus noise."""
-    rng = np.random.default_rng(seed)
-    x = prbs_position(rng, duration_s)
-    torque = nominal_torque(x) + reflex_torque(x, delay_s=0.045, gain=15.0)
-    return JointTrial(name, x, torque + 0.05 * rng.standard_normal(x.size))
-
-
 @pytest.fixture(scope="module")
 def pooled():
     return diagnose_joint(
-        [_record("a", 1), _record("b", 2)], DiagnosisConfig(candidates=["reflex", "channel_delay"])
+        [noisy_joint_record("a", 1, reflex_gain=15.0), noisy_joint_record("b", 2, reflex_gain=15.0)],
+        DiagnosisConfig(candidates=["reflex", "channel_delay"]),
     )
 
 
 @pytest.fixture(scope="module")
 def per_trial():
     return diagnose_joint(
-        [_record("trial one", 3), _record("b", 4)],
+        [noisy_joint_record("trial one", 3, reflex_gain=15.0), noisy_joint_record("b", 4, reflex_gain=15.0)],
         DiagnosisConfig(candidates=["reflex", "channel_delay"], per_trial=True),
     )
 
