@@ -20,7 +20,6 @@ from conftest import (
 )
 
 from armlab.config.diagnosis import DiagnosisConfig
-from armlab.diagnosis import attribution as at
 from armlab.diagnosis.attribution import held_out_gap, select_effects
 from armlab.diagnosis.joint_data import noise_floor
 from armlab.diagnosis.joint_models import JOINT_SURROGATES, fit_model
@@ -50,11 +49,6 @@ def _select(torque_fn, names, *, seed=0, rules=None):
         (rules or DiagnosisConfig()).for_protocol("joint_1dof"),
         band_share=_BAND_SHARE,
     )
-
-
-def test_every_name_in_all_resolves():
-    for name in at.__all__:
-        assert getattr(at, name) is not None
 
 
 def test_held_out_gap_is_residual_over_measured_power_on_the_held_out_parts():

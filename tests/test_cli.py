@@ -65,25 +65,22 @@ def test_help_lists_verbs_and_protocols(capsys):
         assert word in out
 
 
-@pytest.mark.parametrize(
-    "package",
-    [
-        "armlab",
-        "armlab.config",
-        "armlab.data",
-        "armlab.estimation",
-        "armlab.models",
-        "armlab.perturbations",
-        "armlab.protocols",
-        "armlab.sensors",
-        "armlab.sim",
-        "armlab.viz",
-    ],
-)
-def test_public_api_names_resolve(package):
-    mod = importlib.import_module(package)
-    for name in mod.__all__:
-        assert hasattr(mod, name), f"{package}.{name}"
+def _public_modules() -> list[str]:
+    """Every armlab module and package that declares a public API (``__all__``)."""
+    import pkgutil
+
+    import armlab
+
+    names = ["armlab"] + [m.name for m in pkgutil.walk_packages(armlab.__path__, "armlab.")]
+    return [n for n in names if hasattr(importlib.import_module(n), "__all__")]
+
+
+@pytest.mark.parametrize("module", _public_modules())
+def test_public_api_names_resolve(module):
+    mod = importlib.import_module(module)
+    missing = [name for name in mod.__all__ if not hasattr(mod, name)]
+    assert not missing, f"{module}.__all__ names what it lacks: {missing}"
+    assert len(set(mod.__all__)) == len(mod.__all__), f"{module}.__all__ repeats a name"
 
 
 # A small run: two windows (k = 1, 26), 7 trials each (6 identify, one per direction), no figures

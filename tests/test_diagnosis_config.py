@@ -6,7 +6,6 @@ import pytest
 from hydra import compose, initialize
 from omegaconf import OmegaConf
 
-from armlab.config import diagnosis as dcfg
 from armlab.config.diagnosis import (
     DIAGNOSIS_PROTOCOLS,
     DiagnosisConfig,
@@ -15,11 +14,6 @@ from armlab.config.diagnosis import (
 )
 from armlab.config.store import apply_overrides
 from armlab.errors import ConfigError
-
-
-def test_every_name_in_all_resolves():
-    for name in dcfg.__all__:
-        assert getattr(dcfg, name) is not None
 
 
 def test_defaults_are_valid():

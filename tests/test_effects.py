@@ -15,11 +15,6 @@ from armlab.config.store import CONFIG_DIR, available_options
 from armlab.errors import ConfigError
 
 
-def test_every_name_in_all_resolves():
-    for name in fx.__all__:
-        assert getattr(fx, name) is not None
-
-
 def test_catalogue_entries_are_documented_and_switchable():
     assert list(EFFECTS) == [f.name for f in fields(EffectsConfig)]
     for name, cls in EFFECTS.items():

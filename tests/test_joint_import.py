@@ -454,8 +454,3 @@ def test_reklab_mat_trials_are_the_csv_trials(reklab):
     np.testing.assert_allclose(tv.position, pilot.position, rtol=_CSV_RTOL, atol=0)
     np.testing.assert_allclose(tv.torque, pilot.torque, rtol=_CSV_RTOL, atol=0)
     np.testing.assert_allclose(tv.operating_point, pilot.operating_point, rtol=_CSV_RTOL, atol=0)
-
-
-def test_public_names_resolve():
-    assert all(hasattr(armlab.data, name) for name in armlab.data.__all__)
-    assert len(set(armlab.data.__all__)) == len(armlab.data.__all__)

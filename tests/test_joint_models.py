@@ -31,7 +31,6 @@ from scipy import signal
 
 from armlab.config.diagnosis import DiagnosisConfig
 from armlab.config.effects import EFFECTS, PayloadMass, effect_names
-from armlab.diagnosis import joint_models as jm
 from armlab.diagnosis.attribution import held_out_gap
 from armlab.diagnosis.joint_data import highpass_sos, noise_floor
 from armlab.diagnosis.joint_models import JOINT_SURROGATES, fit_model
@@ -56,11 +55,6 @@ def _beta(model, name):
 def _train_rss(model, trials):
     """N·m², residual sum of squares over the training parts."""
     return sum(float(np.sum(r[tr.train] ** 2)) for r, tr in zip(model.residuals, trials, strict=True))
-
-
-def test_every_name_in_all_resolves():
-    for name in jm.__all__:
-        assert getattr(jm, name) is not None
 
 
 def test_surrogates_cover_the_joint_protocol_effects():

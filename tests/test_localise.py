@@ -18,7 +18,6 @@ from conftest import (
 )
 from scipy import signal
 
-from armlab.diagnosis import localise as lo
 from armlab.diagnosis.joint_data import noise_floor
 from armlab.diagnosis.localise import (
     BANDS_HZ,
@@ -39,11 +38,6 @@ def data():
     records = joint_trials(smooth(steps), nominal_torque, rng, noise_std=0.15)
     trials, hp, y_band = prepared(records)
     return records, trials, hp, y_band, steps
-
-
-def test_every_name_in_all_resolves():
-    for name in lo.__all__:
-        assert getattr(lo, name) is not None
 
 
 def test_onsets_are_the_prbs_switch_times(data):

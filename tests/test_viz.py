@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 from conftest import assert_png, verify_rrd
 
-import armlab.viz
 from armlab.data.trial import TrialSet
 from armlab.errors import ConfigError, DataError
 from armlab.viz import (
@@ -132,11 +131,6 @@ def _validation_series(n: int = 200) -> dict:
         "dtau_reduced": 0.97 * base,
         "t_obs_s": 0.25,
     }
-
-
-def test_public_api_resolves():
-    for name in armlab.viz.__all__:
-        assert getattr(armlab.viz, name) is not None
 
 
 @pytest.mark.parametrize("model", ["full", "reduced"])

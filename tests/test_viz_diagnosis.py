@@ -56,8 +56,6 @@ def _check_pngs(paths: list[Path], out: Path) -> None:
 
 def test_exported_from_viz():
     assert {"diagnosis_figures", "diagnosis_recording"} <= set(armlab.viz.__all__)
-    for name in armlab.viz.__all__:
-        assert getattr(armlab.viz, name) is not None
 
 
 def test_importing_viz_does_not_import_rerun():

@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 from conftest import assert_png
 
-import armlab.viz
 from armlab.data.trial import TrialSet
 from armlab.errors import ConfigError, DataError
 from armlab.viz import (
@@ -155,11 +154,6 @@ def _trials(n_trials: int = 2, n_samples: int = 4000, with_link: bool = True) ->
         trial_meta={"tracking_error": np.full(n_trials, 0.14)},
         attrs={"protocol": "fractional_elbow", "link_length_m": L_M} if with_link else {},
     )
-
-
-def test_public_api_resolves():
-    for name in armlab.viz.__all__:
-        assert getattr(armlab.viz, name) is not None
 
 
 @pytest.mark.parametrize(
