@@ -18,11 +18,11 @@ from pathlib import Path
 
 from armlab.config.diagnosis import DiagnosisConfig, RefereeConfig
 from armlab.data.reklab import DEFAULT_REKLAB_ROOT
-from armlab.diagnosis.cond_models import COND_SURROGATES
-from armlab.diagnosis.cond_referee import make_cond_dataset
-from armlab.diagnosis.diagnose import candidate_names
-from armlab.diagnosis.referee import make_dataset
-from armlab.protocols.diagnosis_run import run_diagnoser
+from armlab.protocols.conditioning_window.diagnosis.models import COND_SURROGATES
+from armlab.protocols.conditioning_window.diagnosis.referee import make_cond_dataset
+from armlab.protocols.joint_1dof.diagnosis.diagnose import candidate_names
+from armlab.protocols.joint_1dof.diagnosis.referee import make_dataset
+from armlab.runner.diagnose import run_diagnoser
 
 TARGET_S = 60.0  # s, issue 5
 

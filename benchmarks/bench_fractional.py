@@ -13,12 +13,13 @@ import tempfile
 import time
 from pathlib import Path
 
-from armlab.config.schema import ElbowConfig, ExperimentConfig, ScenarioConfig, SensorsConfig, SimConfig
-from armlab.protocols.runner import run_protocol
+from armlab.config.schema import ElbowConfig, ScenarioConfig, SensorsConfig, SimConfig
+from armlab.protocols.fractional_elbow.config import FractionalElbowConfig
+from armlab.runner.run import run_protocol
 
 
 def main() -> None:
-    cfg = ExperimentConfig(
+    cfg = FractionalElbowConfig(
         protocol_name="fractional_elbow",
         elbow=ElbowConfig(impedance="fractional"),
         sim=SimConfig(timestep_s=0.0001),  # the protocol's default (configs/protocol/fractional_elbow.yaml)

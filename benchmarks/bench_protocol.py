@@ -17,14 +17,14 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
-from armlab.config.schema import ExperimentConfig
 from armlab.data.h5io import read_trials
 from armlab.estimation.joint_ls import estimate, estimate_windows
 from armlab.estimation.processing import ProcessingConfig, joint_signals
 from armlab.models.scene import build_scene
 from armlab.perturbations.scenario import load_scenario
-from armlab.protocols.conditioning_window import window_specs
-from armlab.protocols.runner import run_protocol
+from armlab.protocols.conditioning_window.config import ConditioningWindowConfig
+from armlab.protocols.conditioning_window.experiment import window_specs
+from armlab.runner.run import run_protocol
 from armlab.sim.hold import settle
 
 
@@ -37,7 +37,7 @@ def _mean_time(fn, reps: int = 20) -> float:
 
 
 def main() -> None:
-    cfg = ExperimentConfig()
+    cfg = ConditioningWindowConfig()
     with tempfile.TemporaryDirectory() as tmp:
         t0 = time.perf_counter()
         res = run_protocol(cfg, Path(tmp) / "run")

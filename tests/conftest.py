@@ -51,7 +51,7 @@ def lab(request) -> Lab:
 # ---------------------------------------------------------------------------------------------
 # Synthetic 1-DoF joint trials for the diagnosis tests (tests/test_joint_*.py, test_localise.py,
 # test_attribution.py, test_diagnose.py): a position-imposed joint with known I, B, K and the
-# catalogue effects written directly in NumPy, independent of armlab.diagnosis.joint_models.
+# catalogue effects written directly in NumPy, independent of armlab.diagnosis.families.
 # ---------------------------------------------------------------------------------------------
 
 JOINT_FS_HZ = 1000.0  # Hz, recorded rate
@@ -62,7 +62,8 @@ JOINT_K = 120.0  # N·m/rad, same source
 
 @dataclass(frozen=True, eq=False)
 class JointTrial:
-    """The fields :func:`armlab.diagnosis.joint_data.prepare_trials` reads from an imported trial."""
+    """The fields :func:`armlab.protocols.joint_1dof.diagnosis.data.prepare_trials` reads from an "
+    "imported trial."""
 
     name: str
     position: np.ndarray  # (n,) rad
@@ -177,7 +178,7 @@ def prepared(records, cfg=None, **kw):
     """(trials, scoring high-pass, measured torque in the scoring band) as diagnose_joint makes them
     (``kw``: further arguments of prepare_trials, e.g. ``edge_s``)."""
     from armlab.config.diagnosis import DiagnosisConfig
-    from armlab.diagnosis.diagnose import prepare_scoring
+    from armlab.protocols.joint_1dof.diagnosis.diagnose import prepare_scoring
 
     return prepare_scoring(records, cfg or DiagnosisConfig(), **kw)
 

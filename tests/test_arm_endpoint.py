@@ -13,7 +13,7 @@ from armlab.models import planar_arm
 from armlab.models.arm_endpoint import endpoint_truth, relaxed_activation
 from armlab.models.capstan_scene import CapstanScene, build_capstan_scene
 
-# the protocol's arm trials (armlab/protocols/virtual_force_sensor.py, VfsConfig, SimConfig)
+# the protocol's arm trials (armlab/protocols/virtual_force_sensor/experiment.py, VfsConfig, SimConfig)
 SIM = dict(timestep_s=0.00025, integrator="Euler")
 HANDLE_XY = np.array([0.383, 0.015])  # m, Table V's equilibrium
 LEVEL = 0.04  # the relaxed subject's co-contraction

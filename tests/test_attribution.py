@@ -21,8 +21,10 @@ from conftest import (
 
 from armlab.config.diagnosis import DiagnosisConfig
 from armlab.diagnosis.attribution import held_out_gap, select_effects
-from armlab.diagnosis.joint_data import noise_floor
-from armlab.diagnosis.joint_models import JOINT_SURROGATES, fit_model
+from armlab.diagnosis.families import fit_model
+from armlab.protocols.joint_1dof.diagnosis.data import noise_floor
+from armlab.protocols.joint_1dof.diagnosis.models import JOINT_FAMILY, JOINT_SURROGATES
+from armlab.protocols.joint_1dof.diagnosis.rules import RULES
 
 _CFG = DiagnosisConfig()
 _BAND_SHARE = (_CFG.band_hz - _CFG.highpass_hz) / (0.5 * _CFG.fs_fit_hz)
@@ -46,15 +48,16 @@ def _select(torque_fn, names, *, seed=0, rules=None):
         hp,
         cands,
         floor,
-        (rules or DiagnosisConfig()).for_protocol("joint_1dof"),
+        (rules or DiagnosisConfig()).with_rules(RULES),
         band_share=_BAND_SHARE,
+        family=JOINT_FAMILY,
     )
 
 
 def test_held_out_gap_is_residual_over_measured_power_on_the_held_out_parts():
     rng = np.random.default_rng(0)
     trials, hp, y_band = prepared(joint_trials(prbs_position(rng, 10.0), nominal_torque, rng))
-    model = fit_model(trials, y_band, (), hp)
+    model = fit_model(trials, y_band, (), hp, family=JOINT_FAMILY)
     gap, rss, per_trial = held_out_gap(model, trials, y_band)
     r = [m[tr.held] for m, tr in zip(model.residuals, trials, strict=True)]
     y = [m[tr.held] for m, tr in zip(y_band, trials, strict=True)]

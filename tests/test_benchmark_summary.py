@@ -1,4 +1,5 @@
-"""armlab.diagnosis.benchmark_summary (and the scoring half of armlab.diagnosis.referee) on
+"""armlab.diagnosis.benchmark_summary (and the scoring half of
+armlab.protocols.joint_1dof.diagnosis.referee) on
 hand-made cases: confusion counts, rates, targets, the Markdown table.
 
 ``referee.make_dataset`` needs the joint simulator and is not tested here.
@@ -11,13 +12,20 @@ import math
 import pytest
 
 from armlab.config.diagnosis import RefereeConfig
+from armlab.diagnosis import scoring
 from armlab.diagnosis.benchmark_summary import TARGETS, format_benchmark, summarise
-from armlab.diagnosis.referee import JOINT_CLASSES, expected_verdict, score_case
+from armlab.diagnosis.scoring import expected_verdict
+from armlab.protocols.joint_1dof.diagnosis.referee import JOINT_CLASSES
+
+
+def score_case(cls, results):
+    """Score against the joint referee's classes."""
+    return scoring.score_case(cls, results, expected_verdict(cls, JOINT_CLASSES))
 
 
 def _case(cls, predicted, *, enr=2.0, shrink=0.8, verdict=None):
     verdict = verdict or [predicted]
-    expected = expected_verdict(cls)
+    expected = expected_verdict(cls, JOINT_CLASSES)
     return {
         "class": cls,
         "predicted": predicted,
@@ -119,7 +127,7 @@ def test_missing_figures_are_none_not_met_or_failed():
 
 def test_markdown_table():
     s = summarise(_cases()) | {"timing_s": 12.0, "median_diagnosis_s": 1.5}
-    md = format_benchmark(s, RefereeConfig(replicates=2))
+    md = format_benchmark(s, RefereeConfig(protocol="joint_1dof", replicates=2))
     assert md.startswith("# Diagnosis benchmark — protocol `joint_1dof`\n")
     assert "5 classes × 2 replicates = 10 datasets" in md
     assert "| top-1 accuracy where ENR ≥ 1 (incl. none) | 75 % | 90 % | False |" in md
@@ -132,18 +140,18 @@ def test_markdown_table():
     assert md.endswith("\n")
 
 
-# --- referee scoring (armlab.diagnosis.referee) ---
+# --- referee scoring (armlab.protocols.joint_1dof.diagnosis.referee) ---
 
 
 def test_expected_verdicts_of_the_joint_classes():
-    assert expected_verdict("none") == {"none"}
-    assert expected_verdict("reflex") == {"reflex"}
-    assert expected_verdict("reflex+joint_friction") == {"reflex", "joint_friction"}
-    assert expected_verdict("left_out:reflex") == {"unknown"}
+    assert expected_verdict("none", JOINT_CLASSES) == {"none"}
+    assert expected_verdict("reflex", JOINT_CLASSES) == {"reflex"}
+    assert expected_verdict("reflex+joint_friction", JOINT_CLASSES) == {"reflex", "joint_friction"}
+    assert expected_verdict("left_out:reflex", JOINT_CLASSES) == {"unknown"}
     # the issue's minimum: at least 9 classes
     assert len(JOINT_CLASSES) >= 9
     with pytest.raises(KeyError):
-        expected_verdict("nope")
+        expected_verdict("nope", JOINT_CLASSES)
 
 
 def _results(verdict, ranking, nominal, floor, added):

@@ -16,7 +16,7 @@ from armlab.models.capstan_robot import CAPSTAN_RATIO
 from armlab.models.capstan_scene import LOADS, CapstanScene, build_capstan_scene
 from armlab.models.spring_array import TABLE_I_PAYLOADS_KG, TABLE_I_STIFFNESS, table_i_array
 
-# the protocol's physics (armlab/protocols/virtual_force_sensor.py with configs/sim defaults)
+# the protocol's physics (armlab/protocols/virtual_force_sensor/experiment.py with configs/sim defaults)
 SIM = dict(timestep_s=0.00025, integrator="Euler")
 HANDLE_XY = np.array([0.383, 0.015])  # m, Table V's equilibrium (VfsConfig.arm_handle_m)
 REACH_M = 0.5  # m, hand 50 cm anterior to the shoulder (Sec. II-C-2)

@@ -13,9 +13,10 @@ import pytest
 from conftest import JOINT_FS_HZ, nominal_torque, prbs_position
 
 from armlab.cli import main
-from armlab.config.effects import EFFECTS, effect_names
+from armlab.config.effects import EFFECTS
 from armlab.data.joint_import import write_joint_csv
-from armlab.diagnosis.joint_models import JOINT_SURROGATES
+from armlab.protocols import registry
+from armlab.protocols.joint_1dof.diagnosis.models import JOINT_SURROGATES
 
 
 def _listed(out: str) -> list[str]:
@@ -40,14 +41,14 @@ def test_effects_lists_the_whole_catalogue(capsys):
 def test_effects_of_one_protocol(capsys):
     assert main(["effects", "protocol=joint_1dof"]) == 0
     out = capsys.readouterr().out
-    assert _listed(out) == list(effect_names("joint_1dof"))
+    assert _listed(out) == list(registry.get("joint_1dof").catalogue)
     assert "cable_drag" not in _listed(out)
     # the diagnosable candidates are named first
     header = next(line for line in out.splitlines() if line.startswith("candidates of"))
     assert header.endswith(": " + ", ".join(JOINT_SURROGATES))
     assert main(["effects", "protocol=virtual_force_sensor"]) == 0
     out = capsys.readouterr().out
-    assert _listed(out) == list(effect_names("virtual_force_sensor")) and "candidates of" not in out
+    assert _listed(out) == list(registry.get("virtual_force_sensor").catalogue) and "candidates of" not in out
 
 
 @pytest.mark.parametrize(
@@ -92,8 +93,7 @@ def trial_folder(tmp_path):
         (["estimator.x=1"], "unknown argument 'estimator.x=1'"),
         (
             ["data={data}", "protocol=fractional_elbow"],
-            "diagnosis of protocol 'fractional_elbow' is not available; choose one of "
-            "['joint_1dof', 'conditioning_window']",
+            "protocol 'fractional_elbow' cannot be diagnosed; valid: ['conditioning_window', 'joint_1dof']",
         ),
         (
             ["data={data}/missing", "protocol=joint_1dof"],
@@ -141,7 +141,7 @@ def test_diagnose_argument_errors(args, message, trial_folder, tmp_path, capsys)
     [
         (
             ["referee.protocol=x"],
-            "referee protocol 'x' is not available; choose one of ['joint_1dof', 'conditioning_window']",
+            "unknown protocol 'x'; valid: ['conditioning_window', 'joint_1dof']",
         ),
         (
             ["referee.classes=[nope]"],

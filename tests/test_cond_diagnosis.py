@@ -14,21 +14,21 @@ import pytest
 
 from armlab.config.diagnosis import DiagnosisConfig, RefereeConfig
 from armlab.config.effects import EFFECTS
-from armlab.config.schema import ExperimentConfig
-from armlab.diagnosis.cond_data import prepare_cond
-from armlab.diagnosis.cond_diagnose import cond_candidates, diagnose_cond
-from armlab.diagnosis.cond_models import COND_FAMILY, COND_SURROGATES, cond_columns
-from armlab.diagnosis.cond_referee import COND_CLASSES, make_cond_dataset
-from armlab.diagnosis.joint_models import fit_model
-from armlab.diagnosis.referee import expected_verdict
+from armlab.diagnosis.families import fit_model
+from armlab.diagnosis.scoring import expected_verdict
 from armlab.errors import ConfigError, DataError
-from armlab.protocols.conditioning_window import simulate_protocol
+from armlab.protocols.conditioning_window.config import ConditioningWindowConfig
+from armlab.protocols.conditioning_window.diagnosis.data import prepare_cond
+from armlab.protocols.conditioning_window.diagnosis.diagnose import cond_candidates, diagnose_cond
+from armlab.protocols.conditioning_window.diagnosis.models import COND_FAMILY, COND_SURROGATES, cond_columns
+from armlab.protocols.conditioning_window.diagnosis.referee import COND_CLASSES, make_cond_dataset
+from armlab.protocols.conditioning_window.experiment import simulate_protocol
 
 NOISE_N = 0.3  # N, white F/T force noise of the referee (RefereeConfig.force_noise_N)
 
 
-def _cfg(**effects) -> ExperimentConfig:
-    base = ExperimentConfig(protocol_name="conditioning_window")
+def _cfg(**effects) -> ConditioningWindowConfig:
+    base = ConditioningWindowConfig(protocol_name="conditioning_window")
     fx = replace(base.effects, force_sensor_noise=EFFECTS["force_sensor_noise"](std=NOISE_N), **effects)
     return replace(
         base,
@@ -151,11 +151,12 @@ def test_lab_force_effects_delay_and_filter_the_force():
 
     z = np.zeros((1, 50, 1))
     z[0, 10:] = 1.0
-    fx = replace(ExperimentConfig().effects, channel_delay=EFFECTS["channel_delay"](delay_s=0.003))
+    fx = replace(ConditioningWindowConfig().effects, channel_delay=EFFECTS["channel_delay"](delay_s=0.003))
     out = _force_effects(z, fx, 1000.0)
     assert out[0, 12, 0] == 0.0 and out[0, 13, 0] == 1.0
     fx = replace(
-        ExperimentConfig().effects, force_sensor_bandwidth=EFFECTS["force_sensor_bandwidth"](cutoff_hz=20.0)
+        ConditioningWindowConfig().effects,
+        force_sensor_bandwidth=EFFECTS["force_sensor_bandwidth"](cutoff_hz=20.0),
     )
     out = _force_effects(z, fx, 1000.0)
     assert 0 < out[0, 12, 0] < 0.5 and out[0, -1, 0] == pytest.approx(
@@ -181,7 +182,7 @@ def test_referee_dataset_hides_the_truth(tmp_path):
 
 def test_cli_diagnose_writes_report_and_never_overwrites(tmp_path, cuff_trials):
     from armlab.data.h5io import write_trials
-    from armlab.protocols.diagnosis_run import run_diagnosis
+    from armlab.runner.diagnose import run_diagnosis
 
     write_trials(tmp_path / "trials.h5", cuff_trials)
     out, res = run_diagnosis(tmp_path / "trials.h5", "conditioning_window", [], tmp_path / "out")

@@ -1,4 +1,5 @@
-"""armlab.diagnosis.diagnose: candidate lists and the results of ``diagnose_joint`` (pooled and
+"""armlab.protocols.joint_1dof.diagnosis.diagnose: candidate lists and the results of ``diagnose_joint``
+(pooled and
 per trial) on synthetic joint trials with a known effect (see conftest.py).
 """
 
@@ -19,14 +20,15 @@ from conftest import (
 )
 
 from armlab.config.diagnosis import DiagnosisConfig
-from armlab.diagnosis.diagnose import candidate_names, diagnose_joint
-from armlab.diagnosis.joint_models import JOINT_SURROGATES
 from armlab.errors import ConfigError
 from armlab.protocols._files import json_default
+from armlab.protocols.joint_1dof.diagnosis.diagnose import candidate_names, diagnose_joint
+from armlab.protocols.joint_1dof.diagnosis.models import JOINT_SURROGATES
+from armlab.protocols.joint_1dof.diagnosis.rules import RULES
 
 _CANDIDATES = ["reflex", "joint_friction", "channel_delay"]
 
-_NONE_TOL = DiagnosisConfig().for_protocol("joint_1dof").none_tolerance  # 1, of the floor
+_NONE_TOL = DiagnosisConfig().with_rules(RULES).none_tolerance  # 1, of the floor
 
 
 def _records(torque_fn, *, seed=0, duration=12.0):

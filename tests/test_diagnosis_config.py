@@ -7,7 +7,6 @@ from hydra import compose, initialize
 from omegaconf import OmegaConf
 
 from armlab.config.diagnosis import (
-    DIAGNOSIS_PROTOCOLS,
     DiagnosisConfig,
     RefereeConfig,
     register_diagnosis_configs,
@@ -21,7 +20,7 @@ def test_defaults_are_valid():
     assert cfg.candidates is None and cfg.exclude == [] and not cfg.per_trial
     assert 0 < cfg.highpass_hz < cfg.band_hz < 0.45 * cfg.fs_fit_hz
     ref = RefereeConfig()
-    assert ref.protocol in DIAGNOSIS_PROTOCOLS and ref.n_trials >= 2
+    assert ref.protocol is None and ref.n_trials >= 2  # None: the registry's default referee
 
 
 @pytest.mark.parametrize(
@@ -49,10 +48,6 @@ def test_bad_diagnosis_settings_are_refused(kw, message):
 @pytest.mark.parametrize(
     ("kw", "message"),
     [
-        (
-            {"protocol": "fractional_elbow"},
-            "referee protocol 'fractional_elbow' is not available; choose",
-        ),
         ({"replicates": 0}, "referee.replicates >= 1 and n_trials >= 2"),
         ({"n_trials": 1}, "referee.replicates >= 1 and n_trials >= 2"),
         ({"noise_std_Nm": 0.0}, "referee.noise_std_Nm must be > 0"),

@@ -18,10 +18,10 @@ from conftest import (
 
 from armlab.config.diagnosis import DiagnosisConfig
 from armlab.config.effects import EFFECTS
-from armlab.diagnosis._report_text import _why_rejected
-from armlab.diagnosis.diagnose import diagnose_joint
-from armlab.diagnosis.report import format_report, format_summary
+from armlab.diagnosis.report_text import format_summary, why_rejected
 from armlab.protocols._files import json_default
+from armlab.protocols.joint_1dof.diagnosis.diagnose import diagnose_joint
+from armlab.protocols.joint_1dof.diagnosis.report import format_report
 
 CANDIDATES = ["reflex", "joint_friction", "channel_delay"]
 FIGURES = ["gap_by_band.png", "time_overlay.png"]
@@ -203,4 +203,4 @@ def test_format_summary_is_a_few_lines(pooled, per_trial):
 )
 def test_unknown_verdict_names_the_rule_the_best_candidate_failed(entry, words):
     settings = {"min_first_explained": 0.4, "bic_margin": 10.0}
-    assert words in _why_rejected(entry, {}, settings)
+    assert words in why_rejected(entry, {}, settings)

@@ -6,13 +6,13 @@ import math
 from dataclasses import fields
 
 import pytest
-import yaml
 
 from armlab.cli import compose
 from armlab.config import effects as fx
-from armlab.config.effects import EFFECTS, LEVELS, EffectsConfig, effect_names, enabled_effects
+from armlab.config.effects import EFFECTS, LEVELS, EffectsConfig, enabled_effects
 from armlab.config.store import CONFIG_DIR, available_options
 from armlab.errors import ConfigError
+from armlab.protocols import registry
 
 
 def test_catalogue_entries_are_documented_and_switchable():
@@ -20,7 +20,8 @@ def test_catalogue_entries_are_documented_and_switchable():
     for name, cls in EFFECTS.items():
         assert cls.NAME == name
         assert cls.LEVEL in LEVELS
-        assert cls.PHYSICS and cls.SOURCE and cls.PROTOCOLS
+        assert cls.PHYSICS and cls.SOURCE
+        assert any(name in p.catalogue for p in registry.protocols())  # it acts in some lab
         assert set(cls.SIGNED) <= {f.name for f in fields(cls)}
         params = cls().params()
         assert params and all(isinstance(v, float) and math.isfinite(v) for v in params.values())
@@ -31,15 +32,14 @@ def test_confusable_compliances_name_each_other_and_one_separating_trial():
     assert cuff.CONFUSABLE["transmission_compliance"] == transmission.CONFUSABLE["cuff_compliance"]
 
 
-def test_yaml_options_only_repeat_the_dataclass_defaults():
-    # the dataclass is the single source of truth: every YAML option sets known fields to them
+def test_effect_options_come_from_the_dataclasses_alone():
+    # the dataclass is the single source of truth: every option is a ConfigStore node, no YAML
+    # repeats a default
     assert available_options("effects") == sorted(EFFECTS)
+    assert not (CONFIG_DIR / "effects").exists()
     for name, cls in EFFECTS.items():
-        path = CONFIG_DIR / "effects" / f"{name}.yaml"
-        assert path.read_text().startswith("# @package effects\n")
-        values = yaml.safe_load(path.read_text())[name]
-        assert values == {k: v for k, v in cls().params().items() if k in values}
-        assert set(values) == set(cls().params())
+        _, exp = compose([f"effects=[{name}]"])
+        assert getattr(exp.effects, name) == cls()
 
 
 @pytest.mark.parametrize(
@@ -71,15 +71,16 @@ def test_signed_parameters_may_be_negative():
     assert fx.ForceSensorDrift(bias=-0.2, drift_per_s=-0.01).params() == {"bias": -0.2, "drift_per_s": -0.01}
 
 
-def test_effect_names_by_protocol():
-    assert effect_names() == tuple(EFFECTS)
-    joint = effect_names("joint_1dof")
+def test_each_protocol_names_the_catalogue_effects_of_its_lab():
+    joint = registry.get("joint_1dof").catalogue
     assert {"reflex", "joint_friction", "channel_delay", "cuff_compliance"} <= set(joint)
     assert "cable_drag" not in joint and "plane_tilt" not in joint
-    assert effect_names("virtual_force_sensor")[0] == "reflex" and "cable_drag" in effect_names(
-        "virtual_force_sensor"
-    )
-    assert effect_names("no_such_protocol") == ()
+    vfs = registry.get("virtual_force_sensor").catalogue
+    assert vfs[0] == "reflex" and "cable_drag" in vfs
+    for p in registry.protocols():
+        assert set(p.catalogue) <= set(EFFECTS) and set(p.effects) <= set(p.catalogue)
+        if p.diagnosis is not None:  # every candidate it scores acts in its lab
+            assert set(p.diagnosis.candidates) <= set(p.catalogue)
 
 
 def test_enabled_effects_in_catalogue_order():

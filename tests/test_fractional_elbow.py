@@ -9,7 +9,6 @@ import pytest
 
 from armlab.config.schema import (
     ElbowConfig,
-    ExperimentConfig,
     FrfConfig,
     ReflexConfig,
     ScenarioConfig,
@@ -17,9 +16,10 @@ from armlab.config.schema import (
     SimConfig,
 )
 from armlab.errors import ConfigError
-from armlab.protocols.fractional_elbow import estimate_fractional, simulate_fractional
+from armlab.protocols.fractional_elbow.config import FractionalElbowConfig
+from armlab.protocols.fractional_elbow.experiment import estimate_fractional, simulate_fractional
 
-CFG = ExperimentConfig(
+CFG = FractionalElbowConfig(
     protocol_name="fractional_elbow",
     elbow=ElbowConfig(impedance="five_element"),
     reflex=ReflexConfig(enabled=False),

@@ -1,4 +1,5 @@
-"""armlab.diagnosis.joint_data: band-limiting, decimation, train/held-out split, repeats, noise floor."""
+"""armlab.protocols.joint_1dof.diagnosis.data: band-limiting, decimation, train/held-out split, "
+"repeats, noise floor."""
 
 from __future__ import annotations
 
@@ -18,9 +19,15 @@ from conftest import (
 from scipy import signal
 
 from armlab.config.diagnosis import DiagnosisConfig
-from armlab.diagnosis.joint_data import highpass_sos, noise_floor, prepare_trials, repeat_groups
-from armlab.diagnosis.joint_models import fit_model
+from armlab.diagnosis.families import fit_model
 from armlab.errors import DataError
+from armlab.protocols.joint_1dof.diagnosis.data import (
+    highpass_sos,
+    noise_floor,
+    prepare_trials,
+    repeat_groups,
+)
+from armlab.protocols.joint_1dof.diagnosis.models import JOINT_FAMILY
 
 _KW = dict(fs_fit_hz=250.0, band_hz=40.0, holdout_fraction=1.0 / 3.0, slow_hz=0.3, min_duration_s=6.0)
 
@@ -127,7 +134,7 @@ def test_filtered_torque_stays_the_model_of_the_filtered_motion_up_to_the_ends()
     # bound is for the band filter's edge handling
     assert np.max(np.abs(error)) < 0.02 * np.sqrt(np.mean(tr.y**2))
     trials, hp, y_band = prepared(records)
-    nominal = fit_model(trials, y_band, (), hp)
+    nominal = fit_model(trials, y_band, (), hp, family=JOINT_FAMILY)
     assert nominal.linear_names == ("I", "B", "K")
     # the torque opposes the motion: the coefficients of the columns [a, v, x] are -I, -B, -K
     np.testing.assert_allclose(-nominal.beta[0], [JOINT_I, JOINT_B, JOINT_K], rtol=0.01)

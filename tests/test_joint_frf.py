@@ -8,7 +8,7 @@ import pytest
 from armlab.config.schema import FrfConfig
 from armlab.data.reklab import DEFAULT_REKLAB_ROOT, list_ankle_trials, load_ankle_trial
 from armlab.errors import ConfigError, DataError
-from armlab.protocols.joint_frf import JOINT_BAND_HZ, fit_joint_frf
+from armlab.protocols.joint_1dof.frf import JOINT_BAND_HZ, fit_joint_frf
 
 FS = 1000.0  # Hz, the REKLAB rate
 I, B, K = 0.018, 1.2, 130.0  # kg m², N m s/rad^alpha, N m/rad: the ankle's order of magnitude

@@ -1,4 +1,5 @@
-"""armlab.diagnosis.joint_models: every candidate surrogate recovers the parameters of its effect.
+"""armlab.protocols.joint_1dof.diagnosis.models (with the core armlab.diagnosis.families): every candidate
+surrogate recovers the parameters of its effect.
 
 Data: a smoothed PRBS (±0.03 rad, 150 ms clock) imposed on a joint with I = 0.02 kg·m²,
 B = 0.8 N·m·s/rad, K = 120 N·m/rad, two 12 s recordings with 0.05 N·m white torque noise (the
@@ -30,10 +31,12 @@ from conftest import (
 from scipy import signal
 
 from armlab.config.diagnosis import DiagnosisConfig
-from armlab.config.effects import EFFECTS, PayloadMass, effect_names
+from armlab.config.effects import EFFECTS, PayloadMass
 from armlab.diagnosis.attribution import held_out_gap
-from armlab.diagnosis.joint_data import highpass_sos, noise_floor
-from armlab.diagnosis.joint_models import JOINT_SURROGATES, fit_model
+from armlab.diagnosis.families import fit_model
+from armlab.protocols import registry
+from armlab.protocols.joint_1dof.diagnosis.data import highpass_sos, noise_floor
+from armlab.protocols.joint_1dof.diagnosis.models import JOINT_FAMILY, JOINT_SURROGATES
 
 S = JOINT_SURROGATES
 
@@ -42,8 +45,10 @@ def _fit(torque_fn, names, *, seed=1, noise_std=0.05, duration=12.0, **kw):
     rng = np.random.default_rng(seed)
     records = joint_trials(prbs_position(rng, duration), torque_fn, rng, noise_std=noise_std)
     trials, hp, y_band = prepared(records, **kw)
-    nominal = fit_model(trials, y_band, (), hp)
-    model = fit_model(trials, y_band, tuple(S[n] for n in names), hp, nominal_beta=nominal.beta)
+    nominal = fit_model(trials, y_band, (), hp, family=JOINT_FAMILY)
+    model = fit_model(
+        trials, y_band, tuple(S[n] for n in names), hp, nominal_beta=nominal.beta, family=JOINT_FAMILY
+    )
     return trials, y_band, nominal, model
 
 
@@ -58,7 +63,7 @@ def _train_rss(model, trials):
 
 
 def test_surrogates_cover_the_joint_protocol_effects():
-    joint = set(effect_names("joint_1dof"))
+    joint = set(registry.get("joint_1dof").catalogue)
     assert set(S) <= joint
     # the rest are sensor noise, drift, quantisation: they set the floor or sit below the
     # scoring band, no candidate model is needed
@@ -164,7 +169,7 @@ def test_cocontraction_recovers_the_stiffness_and_damping_slopes():
         for k in range(2)
     ]
     trials, hp, y_band = prepared(records)
-    fm = fit_model(trials, y_band, (S["cocontraction_variation"],), hp)
+    fm = fit_model(trials, y_band, (S["cocontraction_variation"],), hp, family=JOINT_FAMILY)
     assert fm.theta == {}  # linear only
     # m is the 0.3 Hz low-pass of the torque, zero mean and unit rms: ≈ c/depth for a 0.05 Hz
     # fluctuation, so the slopes are -K·depth and -B·depth; the low-pass's gain and its end
@@ -187,10 +192,10 @@ def test_payload_mass_is_absorbed_by_the_nominal_inertia():
         prbs_position(rng, 10.0), lambda x: nominal_torque(x, I=JOINT_I + extra_i), rng, noise_std=0.05
     )
     trials, hp, y_band = prepared(records)
-    nominal = fit_model(trials, y_band, (), hp)
+    nominal = fit_model(trials, y_band, (), hp, family=JOINT_FAMILY)
     # within 2 %, the nominal-fit tolerance above (0.05 N·m noise on ~3 N·m of torque)
     np.testing.assert_allclose(-_beta(nominal, "I"), JOINT_I + extra_i, rtol=0.02)
-    fm = fit_model(trials, y_band, (S["payload_mass"],), hp)
+    fm = fit_model(trials, y_band, (S["payload_mass"],), hp, family=JOINT_FAMILY)
     assert fm.linear_names == nominal.linear_names and fm.n_params == nominal.n_params
     np.testing.assert_allclose(fm.beta, nominal.beta)
 
@@ -201,10 +206,16 @@ def test_theta0_is_kept_for_the_effects_already_fitted():
 
     rng = np.random.default_rng(1)
     trials, hp, y_band = prepared(joint_trials(prbs_position(rng, 12.0), torque, rng, noise_std=0.05))
-    nominal = fit_model(trials, y_band, (), hp)
-    reflex = fit_model(trials, y_band, (S["reflex"],), hp, nominal_beta=nominal.beta)
+    nominal = fit_model(trials, y_band, (), hp, family=JOINT_FAMILY)
+    reflex = fit_model(trials, y_band, (S["reflex"],), hp, nominal_beta=nominal.beta, family=JOINT_FAMILY)
     both = fit_model(
-        trials, y_band, (S["reflex"], S["joint_friction"]), hp, theta0=reflex.theta, nominal_beta=nominal.beta
+        trials,
+        y_band,
+        (S["reflex"], S["joint_friction"]),
+        hp,
+        theta0=reflex.theta,
+        nominal_beta=nominal.beta,
+        family=JOINT_FAMILY,
     )
     assert both.effects == ("reflex", "joint_friction")
     assert both.linear_names == ("I", "B", "K", "reflex.gain", "joint_friction.coulomb")
@@ -228,11 +239,11 @@ def test_a_wrong_effect_explains_nothing_of_pure_noise():
         * n_h
         / sum(float(np.sum(y[tr.held] ** 2)) for y, tr in zip(y_band, trials, strict=True))
     )
-    nominal = fit_model(trials, y_band, (), hp)
+    nominal = fit_model(trials, y_band, (), hp, family=JOINT_FAMILY)
     gap0 = held_out_gap(nominal, trials, y_band)[0]
     assert gap0 == pytest.approx(floor, rel=0.25)  # the nominal model already reaches the floor
     for name, sur in S.items():
         if sur.kind == "absorbed":
             continue
-        fm = fit_model(trials, y_band, (sur,), hp, nominal_beta=nominal.beta)
+        fm = fit_model(trials, y_band, (sur,), hp, nominal_beta=nominal.beta, family=JOINT_FAMILY)
         assert gap0 - held_out_gap(fm, trials, y_band)[0] < 0.1 * floor, name

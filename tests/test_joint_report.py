@@ -7,9 +7,10 @@ import json
 import numpy as np
 import pytest
 
+from armlab import viz
 from armlab.cli import main
 from armlab.errors import ConfigError, DataError
-from armlab.protocols.joint_report import fit_joint_recordings, joint_frf_config
+from armlab.protocols.joint_1dof.fit_command import fit_joint_recordings, joint_frf_config
 
 FS = 1000.0
 I, B, K = 0.02, 1.0, 100.0  # kg m², N m s/rad, N m/rad
@@ -59,17 +60,17 @@ def test_folder_is_fitted_and_written(folder, tmp_path, capsys):
 
 def test_single_file_and_bad_input(folder, tmp_path, capsys):
     out = tmp_path / "one"
-    results = fit_joint_recordings(folder / "a.csv", joint_frf_config(), out)
+    results = fit_joint_recordings(folder / "a.csv", joint_frf_config(), out, viz=viz)
     assert list(results["trials"]) == ["a"]
     with pytest.raises(DataError, match="not empty"):
-        fit_joint_recordings(folder / "a.csv", joint_frf_config(), out)
+        fit_joint_recordings(folder / "a.csv", joint_frf_config(), out, viz=viz)
     (tmp_path / "afile").write_text("keep me")
     with pytest.raises(DataError, match="not a directory"):
-        fit_joint_recordings(folder / "a.csv", joint_frf_config(), tmp_path / "afile")
+        fit_joint_recordings(folder / "a.csv", joint_frf_config(), tmp_path / "afile", viz=viz)
     assert (tmp_path / "afile").read_text() == "keep me"
     assert joint_frf_config(["frf.band_hz=[1,20]"]).band_hz[1] == 20.0
     with pytest.raises(DataError, match="neither a folder"):
-        fit_joint_recordings(folder / "missing.csv", joint_frf_config(), tmp_path / "x")
+        fit_joint_recordings(folder / "missing.csv", joint_frf_config(), tmp_path / "x", viz=viz)
     with pytest.raises(ConfigError, match="unknown frf field 'nope'"):
         joint_frf_config(["frf.nope=1"])
     with pytest.raises(ConfigError, match="frf.<field>=<value>"):

@@ -18,7 +18,6 @@ from conftest import (
 )
 from scipy import signal
 
-from armlab.diagnosis.joint_data import noise_floor
 from armlab.diagnosis.localise import (
     BANDS_HZ,
     WINDOWS_MS,
@@ -28,6 +27,7 @@ from armlab.diagnosis.localise import (
     residual_tests,
     window_breakdown,
 )
+from armlab.protocols.joint_1dof.diagnosis.data import noise_floor
 
 
 @pytest.fixture(scope="module")

@@ -1,4 +1,4 @@
-"""armlab.diagnosis.published_conditioning: the paper's window thresholds as measurements.
+"""armlab.reproduction.conditioning: the paper's window thresholds as measurements.
 
 Simulations run in quick mode (5 windows x 7 trials, about 1 s each); the scoring and ranking
 are checked on hand-made results.
@@ -11,9 +11,9 @@ from dataclasses import replace
 import pytest
 
 from armlab.cli import compose
-from armlab.diagnosis import published_conditioning as pc
 from armlab.errors import ConfigError, DataError
-from armlab.protocols.conditioning_window import PAPER_THRESHOLDS_S
+from armlab.protocols.conditioning_window.experiment import PAPER_THRESHOLDS_S
+from armlab.reproduction import conditioning as pc
 
 
 @pytest.fixture(scope="module")
@@ -113,9 +113,11 @@ def test_variant_errors_name_the_valid_choices(cfg):
 
 
 def test_rejects_other_protocols_and_untyped_configs(cfg):
-    with pytest.raises(ConfigError, match="valid: conditioning_window"):
-        pc.threshold_gap(replace(cfg, protocol_name="fractional_elbow"))
-    with pytest.raises(ConfigError, match=r"compose\(\[...\]\)\[1\]"):
+    with pytest.raises(
+        ConfigError, match="need the conditioning_window experiment, got FractionalElbowConfig"
+    ):
+        pc.threshold_gap(compose(["protocol=fractional_elbow"])[1])
+    with pytest.raises(ConfigError, match=r"compose\(\['protocol=conditioning_window'\]\)\[1\]"):
         pc.threshold_gap(compose(["protocol=conditioning_window"])[0])
 
 

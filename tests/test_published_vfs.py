@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 
 from armlab.cli import compose
-from armlab.diagnosis import published_vfs as pv
 from armlab.errors import ConfigError, DataError
 from armlab.models.spring_array import TABLE_I_PAYLOADS_KG, TABLE_I_STIFFNESS
-from armlab.protocols.vfs_results import PAPER_TABLE_III
+from armlab.protocols.virtual_force_sensor.results import PAPER_TABLE_III
+from armlab.reproduction import vfs as pv
 
 
 def _row(label, param, truth, m1, m2):

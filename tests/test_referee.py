@@ -9,9 +9,10 @@ import pytest
 
 from armlab.config.diagnosis import DiagnosisConfig, RefereeConfig
 from armlab.data.joint_import import load_joint_data
-from armlab.diagnosis.referee import JOINT_CLASSES, expected_verdict, make_dataset
+from armlab.diagnosis.scoring import expected_verdict
 from armlab.errors import DataError
-from armlab.protocols.diagnosis_run import run_benchmark
+from armlab.protocols.joint_1dof.diagnosis.referee import JOINT_CLASSES, make_dataset
+from armlab.runner.diagnose import run_benchmark
 
 
 def test_dataset_is_deterministic_and_holds_no_truth_in_its_trial_folder(tmp_path):
@@ -32,9 +33,9 @@ def test_dataset_is_deterministic_and_holds_no_truth_in_its_trial_folder(tmp_pat
 
 def test_classes_cover_none_singles_a_pair_and_a_left_out_effect():
     assert len(JOINT_CLASSES) >= 9
-    assert expected_verdict("none") == {"none"}
-    assert expected_verdict("left_out:reflex") == {"unknown"}
-    assert expected_verdict("reflex+joint_friction") == {"reflex", "joint_friction"}
+    assert expected_verdict("none", JOINT_CLASSES) == {"none"}
+    assert expected_verdict("left_out:reflex", JOINT_CLASSES) == {"unknown"}
+    assert expected_verdict("reflex+joint_friction", JOINT_CLASSES) == {"reflex", "joint_friction"}
 
 
 @pytest.mark.parametrize(

@@ -14,18 +14,19 @@ import pytest
 from omegaconf import OmegaConf
 
 from armlab.config.capstan import CapstanConfig, VfsConfig
-from armlab.config.schema import ArmConfig, ExperimentConfig, OutputConfig, SensorsConfig, SimConfig
+from armlab.config.schema import ArmConfig, OutputConfig, SensorsConfig, SimConfig
 from armlab.errors import ConfigError, DataError
 from armlab.models.capstan_robot import TABLE_VI_ALPHA
-from armlab.protocols.runner import reestimate, run_protocol
-from armlab.protocols.vfs_results import estimate_vfs
-from armlab.protocols.virtual_force_sensor import simulate_vfs
+from armlab.protocols.virtual_force_sensor.config import VirtualForceSensorConfig
+from armlab.protocols.virtual_force_sensor.experiment import simulate_vfs
+from armlab.protocols.virtual_force_sensor.results import estimate_vfs
+from armlab.runner.run import reestimate, run_protocol
 
 SHORT = {"trial_s": 20.0, "id_s": 15.0, "val_s": 5.0, "settle_s": 1.0}
 
 
-def _cfg(capstan: CapstanConfig, preset: str, **vfs) -> ExperimentConfig:
-    return ExperimentConfig(
+def _cfg(capstan: CapstanConfig, preset: str, **vfs) -> VirtualForceSensorConfig:
+    return VirtualForceSensorConfig(
         protocol_name="virtual_force_sensor",
         sim=SimConfig(timestep_s=0.00025, integrator="Euler"),
         arm=ArmConfig(muscle="linear", cocontraction=0.04),
@@ -35,7 +36,7 @@ def _cfg(capstan: CapstanConfig, preset: str, **vfs) -> ExperimentConfig:
     )
 
 
-def _run(cfg: ExperimentConfig) -> dict:
+def _run(cfg: VirtualForceSensorConfig) -> dict:
     rec = simulate_vfs(cfg)
     results, _ = estimate_vfs(rec.trials, cfg.vfs, rec.truth)
     return results

@@ -19,8 +19,8 @@ from conftest import (
 
 import armlab.viz
 from armlab.config.diagnosis import DiagnosisConfig
-from armlab.diagnosis.diagnose import diagnose_joint
 from armlab.errors import DataError
+from armlab.protocols.joint_1dof.diagnosis.diagnose import diagnose_joint
 from armlab.viz import diagnosis_figures, diagnosis_recording
 
 FIGURES = [

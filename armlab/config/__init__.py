@@ -18,7 +18,6 @@ from armlab.config.schema import (
 from armlab.config.store import (
     CONFIG_DIR,
     available_options,
-    register_configs,
     to_experiment,
 )
 
@@ -38,6 +37,5 @@ __all__ = [
     "SensorsConfig",
     "SimConfig",
     "available_options",
-    "register_configs",
     "to_experiment",
 ]

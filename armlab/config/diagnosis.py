@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 
 from hydra.core.config_store import ConfigStore
@@ -9,30 +10,10 @@ from hydra.core.config_store import ConfigStore
 from armlab.errors import ConfigError
 
 __all__ = [
-    "DIAGNOSIS_PROTOCOLS",
-    "PROTOCOL_RULES",
     "DiagnosisConfig",
     "RefereeConfig",
     "register_diagnosis_configs",
 ]
-
-#: Protocols ``armlab diagnose`` knows how to simulate and score.
-DIAGNOSIS_PROTOCOLS = ("joint_1dof", "conditioning_window")
-
-
-#: Selection thresholds that depend on the protocol's nominal model and scoring set (used where the setting
-#: is left at None). ``none_tolerance``: how far above the floor a clean recording's held-out gap may
-#: scatter: 1-DoF joint clean tuning datasets (seeds 0 and 7, 12 replicates each) scored 0.95-1.06 × floor
-#: (sd 0.03; 0.15 is ~5 sd), the conditioning window's (seed 7, 10 replicates) 0.79-1.29 × floor (sd 0.14;
-#: 0.4 is ~3 sd). ``min_explained``: the share of the nominal excess the selected effects must remove, else
-#: the verdict is ``unknown`` with the effects kept as a partial explanation; a left-out reflex was 56-85 %
-#: "explained" by a force-sensor low-pass or a channel delay in the conditioning window, where correct single
-#: effects remove 85-100 % (friction 91-94 %); the joint protocol's co-contraction surrogate removes only
-#: 67-76 % of a strong variation (tuning seed 0), and no left-out effect there was partly absorbed.
-PROTOCOL_RULES: dict[str, dict[str, float]] = {
-    "joint_1dof": {"none_tolerance": 0.15, "min_explained": 0.5},
-    "conditioning_window": {"none_tolerance": 0.4, "min_explained": 0.8},
-}
 
 
 def _check(cond: bool, msg: str) -> None:
@@ -58,9 +39,9 @@ class DiagnosisConfig:
     min_step_fraction: float = 0.1  # of the nominal excess gap, per accepted effect
     min_floor_fraction: float = 0.1  # of the noise floor, per accepted effect
     min_first_explained: float = 0.4  # of the nominal excess gap, by the first effect
-    # nominal excess within this fraction of the floor -> "none" (None: PROTOCOL_RULES)
+    # nominal excess within this fraction of the floor -> "none" (None: the protocol's rules)
     none_tolerance: float | None = None
-    # share of the nominal excess the selected effects must remove, else "unknown" (None: PROTOCOL_RULES)
+    # share of the nominal excess the selected effects must remove, else "unknown" (None: protocol's rules)
     min_explained: float | None = None
     indistinct_ratio: float = 0.9  # runner-up reduction / winner's above this -> flagged
 
@@ -84,11 +65,15 @@ class DiagnosisConfig:
             f"diagnosis.min_explained must lie in [0, 1], got {self.min_explained}",
         )
 
-    def for_protocol(self, protocol: str) -> DiagnosisConfig:
-        """A copy with the settings left at None set to the protocol's :data:`PROTOCOL_RULES`."""
-        if protocol not in PROTOCOL_RULES:
-            raise ConfigError(f"unknown diagnosis protocol {protocol!r}; valid: {list(PROTOCOL_RULES)}")
-        fill = {k: v for k, v in PROTOCOL_RULES[protocol].items() if getattr(self, k) is None}
+    def with_rules(self, rules: Mapping[str, float]) -> DiagnosisConfig:
+        """A copy with the settings left at None set to a protocol's rules (its ``RULES``:
+        ``none_tolerance`` and ``min_explained``, with their reasons in the protocol's package)."""
+        unknown = [k for k in rules if k not in ("none_tolerance", "min_explained")]
+        if unknown:
+            raise ConfigError(
+                f"unknown diagnosis rules {unknown}; valid: ['none_tolerance', 'min_explained']"
+            )
+        fill = {k: v for k, v in rules.items() if getattr(self, k) is None}
         return replace(self, **fill)
 
 
@@ -96,7 +81,7 @@ class DiagnosisConfig:
 class RefereeConfig:
     """The blind benchmark: pseudo-real datasets from the higher-fidelity simulation."""
 
-    protocol: str = "joint_1dof"
+    protocol: str | None = None  # None: the registry's default referee (armlab.protocols.registry)
     replicates: int = 10  # per class
     seed: int = 1000  # evaluation seeds start here; tuning used seeds 0..999
     n_trials: int = 4  # trials per dataset (two perturbation sequences, each recorded twice)
@@ -115,10 +100,6 @@ class RefereeConfig:
     jobs: int = 2  # datasets diagnosed in parallel (joblib)
 
     def __post_init__(self) -> None:
-        _check(
-            self.protocol in DIAGNOSIS_PROTOCOLS,
-            f"referee protocol {self.protocol!r} is not available; choose one of {list(DIAGNOSIS_PROTOCOLS)}",
-        )
         _check(self.replicates >= 1 and self.n_trials >= 2, "referee.replicates >= 1 and n_trials >= 2")
         _check(self.noise_std_Nm > 0, "referee.noise_std_Nm must be > 0")
         _check(self.force_noise_N > 0, "referee.force_noise_N must be > 0")

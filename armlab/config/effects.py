@@ -3,12 +3,14 @@
 Each effect is a ``@dataclass(kw_only=True)`` whose fields are its parameters (unit in the name,
 typical magnitude and its source in the comment) and whose class attributes say where it acts
 (``LEVEL``: model, controller or sensor), what physics it adds (``PHYSICS``), where its typical
-magnitude comes from (``SOURCE``), which protocols it applies to (``PROTOCOLS``) and which other
-effects it cannot be told apart from with that protocol's trials (``CONFUSABLE``: name -> the
-extra trial that separates them).
+magnitude comes from (``SOURCE``) and which other effects it cannot be told apart from with a
+protocol's trials (``CONFUSABLE``: name -> the extra trial that separates them). Which effects
+act in a protocol's lab, and which its simulation applies, each protocol declares itself
+(:class:`armlab.protocols.Protocol` ``catalogue`` and ``effects``).
 
-Hydra: ``configs/effects/<name>.yaml`` sets an effect's values under ``effects.<name>``; select
-any number with ``effects=[reflex,joint_friction]`` and tune with ``effects.reflex.delay_s=0.05``.
+Hydra: every effect is an option of the ``effects`` group stored in the ConfigStore by
+:func:`register_effect_configs` (its dataclass defaults, no YAML copy); select any number with
+``effects=[reflex,joint_friction]`` and tune with ``effects.reflex.delay_s=0.05``.
 An effect left at ``None`` in :class:`EffectsConfig` is off.
 """
 
@@ -17,6 +19,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, fields
 from typing import ClassVar
+
+from hydra.core.config_store import ConfigStore
 
 from armlab.errors import ConfigError
 
@@ -42,15 +46,11 @@ __all__ = [
     "RobotModelError",
     "TorsoTranslation",
     "TransmissionCompliance",
-    "effect_names",
     "enabled_effects",
+    "register_effect_configs",
 ]
 
 LEVELS = ("model", "controller", "sensor")
-_JOINT = "joint_1dof"
-_COND = "conditioning_window"
-_VFS = "virtual_force_sensor"
-_FRAC = "fractional_elbow"
 
 
 @dataclass(kw_only=True)
@@ -61,7 +61,6 @@ class Effect:
     LEVEL: ClassVar[str] = "model"
     PHYSICS: ClassVar[str] = ""
     SOURCE: ClassVar[str] = ""
-    PROTOCOLS: ClassVar[tuple[str, ...]] = ()
     CONFUSABLE: ClassVar[dict[str, str]] = {}
     SIGNED: ClassVar[tuple[str, ...]] = ()  # fields that may be negative
 
@@ -91,7 +90,6 @@ class Reflex(Effect):
         "Kearney, Stein & Parameswaran 1997 (IEEE TBME 44:493) parallel-cascade ankle model: "
         "40-50 ms latency, reflex dynamics a low-pass near 3-4 Hz; conditioning paper Sec. II"
     )
-    PROTOCOLS: ClassVar[tuple[str, ...]] = (_JOINT, _COND, _VFS, _FRAC)
     CONFUSABLE: ClassVar[dict[str, str]] = {}
     SIGNED: ClassVar[tuple[str, ...]] = ("direction",)
     delay_s: float = 0.045  # s, loop latency, Kearney 1997 (40-50 ms at the ankle)
@@ -112,7 +110,6 @@ class CuffCompliance(Effect):
         "ankle: foot-pedal interface 300-1500 N·m/rad (Kearney & Hunter 1990 Crit. Rev. Biomed. Eng.); "
         "arm: hand-handle 1-5 kN/m (conditioning paper Sec. III, cuff)"
     )
-    PROTOCOLS: ClassVar[tuple[str, ...]] = (_JOINT, _COND, _VFS)
     CONFUSABLE: ClassVar[dict[str, str]] = {
         "transmission_compliance": "an accelerometer on the handle/pedal beside the motor encoder"
     }
@@ -130,7 +127,6 @@ class TransmissionCompliance(Effect):
         "the handle lags the encoder by torque / stiffness"
     )
     SOURCE: ClassVar[str] = "virtual-force-sensor paper (capstan drive), ~2000 N·m/rad at the joint"
-    PROTOCOLS: ClassVar[tuple[str, ...]] = (_JOINT, _VFS)
     CONFUSABLE: ClassVar[dict[str, str]] = {
         "cuff_compliance": "an accelerometer on the handle/pedal beside the motor encoder"
     }
@@ -142,7 +138,6 @@ class CableDrag(Effect):
     NAME: ClassVar[str] = "cable_drag"
     PHYSICS: ClassVar[str] = "elastic drag of the cable harness: a spring from the base to the end effector"
     SOURCE: ClassVar[str] = "virtual-force-sensor paper Sec. V (drag of the sensor cables), ~40 N/m"
-    PROTOCOLS: ClassVar[tuple[str, ...]] = (_VFS,)
     CONFUSABLE: ClassVar[dict[str, str]] = {"arm stiffness": "empty-handle trials (no subject)"}
     stiffness_N_per_m: float = 40.0  # N/m
     rest_length_m: float = 0.25  # m
@@ -159,7 +154,6 @@ class JointFriction(Effect):
         "Olsson et al. 1998 (Eur. J. Control 4:176) friction models; capstan rig 0.05 N·m "
         "(virtual-force-sensor paper Table VI)"
     )
-    PROTOCOLS: ClassVar[tuple[str, ...]] = (_JOINT, _COND, _VFS, _FRAC)
     coulomb_Nm: float = 0.3  # N·m
     stribeck_Nm: float = 0.0  # N·m, extra static friction near zero velocity
     stribeck_velocity_rad_s: float = 0.05  # rad/s
@@ -171,7 +165,6 @@ class ForceSensorNoise(Effect):
     LEVEL: ClassVar[str] = "sensor"
     PHYSICS: ClassVar[str] = "extra white noise on the force/torque channel (sets the noise floor, not a gap)"
     SOURCE: ClassVar[str] = "JR3 50M31 datasheet; ATI Mini45: ~0.01-0.05 N·m per sample"
-    PROTOCOLS: ClassVar[tuple[str, ...]] = (_JOINT, _COND, _VFS, _FRAC)
     std: float = 0.05  # N·m or N
 
 
@@ -181,7 +174,6 @@ class ForceSensorDrift(Effect):
     LEVEL: ClassVar[str] = "sensor"
     PHYSICS: ClassVar[str] = "offset and linear thermal drift of the force/torque channel"
     SOURCE: ClassVar[str] = "strain-gauge drift 0.1-1 % FS per minute (ATI F/T manual, temperature effects)"
-    PROTOCOLS: ClassVar[tuple[str, ...]] = (_JOINT, _COND, _VFS, _FRAC)
     SIGNED: ClassVar[tuple[str, ...]] = ("bias", "drift_per_s")
     bias: float = 0.0  # N·m or N
     drift_per_s: float = 0.02  # N·m/s or N/s
@@ -193,7 +185,6 @@ class ForceSensorBandwidth(Effect):
     LEVEL: ClassVar[str] = "sensor"
     PHYSICS: ClassVar[str] = "2nd-order Butterworth low-pass of the force/torque channel (electronics, DSP)"
     SOURCE: ClassVar[str] = "JR3 DSP filters 8-500 Hz; ankle rigs low-pass torque at 50-200 Hz"
-    PROTOCOLS: ClassVar[tuple[str, ...]] = (_JOINT, _COND, _VFS, _FRAC)
     cutoff_hz: float = 20.0  # Hz
 
 
@@ -203,7 +194,6 @@ class AccelNoise(Effect):
     LEVEL: ClassVar[str] = "sensor"
     PHYSICS: ClassVar[str] = "white noise and offset of the accelerometer"
     SOURCE: ClassVar[str] = "ADXL203 datasheet: 110 µg/sqrt(Hz), offset ±25 mg"
-    PROTOCOLS: ClassVar[tuple[str, ...]] = (_COND, _VFS)
     SIGNED: ClassVar[tuple[str, ...]] = ("bias_m_s2",)
     std_m_s2: float = 0.02  # m/s²
     bias_m_s2: float = 0.1  # m/s²
@@ -215,7 +205,6 @@ class AccelMisalignment(Effect):
     LEVEL: ClassVar[str] = "sensor"
     PHYSICS: ClassVar[str] = "accelerometer axes rotated in the plane relative to the handle frame"
     SOURCE: ClassVar[str] = "mounting tolerance ~1-3 deg (ADXL203 datasheet: axis alignment ±1 deg)"
-    PROTOCOLS: ClassVar[tuple[str, ...]] = (_COND, _VFS)
     SIGNED: ClassVar[tuple[str, ...]] = ("angle_deg",)
     angle_deg: float = 2.0  # deg
 
@@ -226,7 +215,6 @@ class EncoderQuantisation(Effect):
     LEVEL: ClassVar[str] = "sensor"
     PHYSICS: ClassVar[str] = "position rounded to the encoder's resolution before differentiation"
     SOURCE: ClassVar[str] = "16-bit absolute encoder: 2π/65536 rad ≈ 9.6e-5 rad; capstan rig 2 µm"
-    PROTOCOLS: ClassVar[tuple[str, ...]] = (_JOINT, _COND, _VFS, _FRAC)
     step: float = 9.6e-5  # rad (joint) or m (Cartesian)
 
 
@@ -236,7 +224,6 @@ class ChannelDelay(Effect):
     LEVEL: ClassVar[str] = "sensor"
     PHYSICS: ClassVar[str] = "the force channel recorded later than the position channel (separate DAQ/buses)"
     SOURCE: ClassVar[str] = "USB/EtherCAT F/T sensors vs encoder counters: 1-20 ms skew (JR3/ATI manuals)"
-    PROTOCOLS: ClassVar[tuple[str, ...]] = (_JOINT, _COND, _VFS, _FRAC)
     CONFUSABLE: ClassVar[dict[str, str]] = {
         "force_sensor_bandwidth": "a step or impulse perturbation (a pure delay keeps the edge sharp)"
     }
@@ -249,7 +236,6 @@ class PayloadMass(Effect):
     NAME: ClassVar[str] = "payload_mass"
     PHYSICS: ClassVar[str] = "an unmodelled handle/pedal/payload mass beyond the force sensor"
     SOURCE: ClassVar[str] = "handles 0.1-0.5 kg (virtual-force-sensor paper: 135 g handle)"
-    PROTOCOLS: ClassVar[tuple[str, ...]] = (_JOINT, _COND, _VFS, _FRAC)
     CONFUSABLE: ClassVar[dict[str, str]] = {
         "limb inertia": "empty-handle trials (no subject attached)",
         "arm inertia": "empty-handle trials (no subject attached)",
@@ -269,7 +255,6 @@ class CocontractionVariation(Effect):
         "Hunter & Kearney 1982 (J. Biomech. 15:747): ankle stiffness linear in voluntary torque; "
         "tonic-contraction tracking error ~10-20 % of target"
     )
-    PROTOCOLS: ClassVar[tuple[str, ...]] = (_JOINT, _COND, _VFS)
     depth: float = 0.2  # 1, rms of the relative activation fluctuation
     bandwidth_hz: float = 0.3  # Hz, of the fluctuation
     tonic_torque_Nm: float = 5.0  # N·m, tonic torque at the mean activation
@@ -283,7 +268,6 @@ class RobotModelError(Effect):
         "the robot's dynamic parameters used by the virtual force sensor differ from the real robot's"
     )
     SOURCE: ClassVar[str] = "virtual-force-sensor paper Appendix (identified vs CAD, Table VI)"
-    PROTOCOLS: ClassVar[tuple[str, ...]] = (_VFS,)
     SIGNED: ClassVar[tuple[str, ...]] = ("relative_error",)
     relative_error: float = 0.1  # 1, on every inertial parameter
 
@@ -293,7 +277,6 @@ class PlaneTilt(Effect):
     NAME: ClassVar[str] = "plane_tilt"
     PHYSICS: ClassVar[str] = "the movement plane tilted from horizontal: a component of gravity acts in it"
     SOURCE: ClassVar[str] = "table and robot base levelling tolerance ~0.5-2 deg"
-    PROTOCOLS: ClassVar[tuple[str, ...]] = (_COND, _VFS)
     CONFUSABLE: ClassVar[dict[str, str]] = {
         "arm stiffness": "the same perturbations at a second posture or with the plane rotated (the "
         "gravity gradient changes with posture, the muscles' stiffness does not follow it)"
@@ -310,7 +293,6 @@ class TorsoTranslation(Effect):
     SOURCE: ClassVar[str] = (
         "trunk compliance 2-10 kN/m when strapped (Perreault et al. 2004 J. Neurophysiol.)"
     )
-    PROTOCOLS: ClassVar[tuple[str, ...]] = (_COND, _VFS)
     CONFUSABLE: ClassVar[dict[str, str]] = {
         "cuff_compliance": "a marker or accelerometer on the shoulder (acromion) beside the robot encoders"
     }
@@ -366,11 +348,17 @@ class EffectsConfig:
     torso_translation: TorsoTranslation | None = None
 
 
-def effect_names(protocol: str | None = None) -> tuple[str, ...]:
-    """Catalogue names, all or those that apply to ``protocol``."""
-    return tuple(n for n, c in EFFECTS.items() if protocol is None or protocol in c.PROTOCOLS)
-
-
 def enabled_effects(cfg: EffectsConfig) -> dict[str, Effect]:
     """The effects switched on in ``cfg``, in catalogue order."""
     return {n: getattr(cfg, n) for n in EFFECTS if getattr(cfg, n) is not None}
+
+
+def register_effect_configs() -> None:
+    """Store every catalogue effect as an option of Hydra's ``effects`` group (idempotent).
+
+    ``effects=[reflex,joint_friction]`` then switches those on with their dataclass defaults
+    (no YAML repeats them); ``effects.reflex.delay_s=0.05`` tunes one.
+    """
+    cs = ConfigStore.instance()
+    for name, cls in EFFECTS.items():
+        cs.store(group="effects", name=name, package="effects", node={name: cls})

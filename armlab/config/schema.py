@@ -388,25 +388,18 @@ class OutputConfig:
 
 @dataclass(kw_only=True)
 class ExperimentConfig:
-    """A whole experiment: one protocol applied to one simulated subject."""
+    """What every protocol's experiment has; each protocol's schema adds the groups it reads.
 
-    protocol_name: str = "conditioning_window"  # set by configs/protocol/<name>.yaml
+    The protocol schemas (``armlab/protocols/<name>/config.py``) subclass this one, so an
+    override of a group the chosen protocol does not read is refused, never silently ignored.
+    """
+
+    protocol_name: str = ""  # set by each protocol's schema
     seed: int = 0
-    arm: ArmConfig = field(default_factory=ArmConfig)
-    reflex: ReflexConfig = field(default_factory=ReflexConfig)
-    cuff: CuffConfig = field(default_factory=CuffConfig)
-    robot: RobotConfig = field(default_factory=RobotConfig)
-    elbow: ElbowConfig = field(default_factory=ElbowConfig)
-    motor: DirectDriveConfig = field(default_factory=DirectDriveConfig)
-    frf: FrfConfig = field(default_factory=FrfConfig)
-    capstan: CapstanConfig = field(default_factory=CapstanConfig)
-    vfs: VfsConfig = field(default_factory=VfsConfig)
     sim: SimConfig = field(default_factory=SimConfig)
     sensors: SensorsConfig = field(default_factory=SensorsConfig)
-    scenario: ScenarioConfig = field(default_factory=ScenarioConfig)
-    estimator: EstimatorConfig = field(default_factory=EstimatorConfig)
     output: OutputConfig = field(default_factory=OutputConfig)
-    effects: EffectsConfig = field(default_factory=EffectsConfig)  # configs/effects/, all off by default
+    effects: EffectsConfig = field(default_factory=EffectsConfig)  # the catalogue, all off by default
 
     def __post_init__(self) -> None:
         _check(self.seed >= 0, f"seed must be a non-negative integer, got {self.seed}")

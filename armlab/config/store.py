@@ -14,26 +14,28 @@ __all__ = [
     "CONFIG_DIR",
     "apply_overrides",
     "available_options",
-    "register_configs",
+    "stored_group",
     "to_experiment",
 ]
 
 CONFIG_DIR = Path(__file__).resolve().parents[2] / "configs"
 
 
-def register_configs() -> None:
-    """Register the experiment schema as ``base_config`` (idempotent)."""
-    ConfigStore.instance().store(name="base_config", node=ExperimentConfig)
-
-
 def available_options(group: str) -> list[str]:
-    """Names of the YAML options of a config group (``configs/<group>/*.yaml``)."""
+    """Names of the options of a config group: ``configs/<group>/*.yaml`` and the typed nodes
+    stored in Hydra's ConfigStore under that group (e.g. the effect catalogue)."""
     folder = CONFIG_DIR / group
-    return sorted(p.stem for p in folder.glob("*.yaml")) if folder.is_dir() else []
+    names = {p.stem for p in folder.glob("*.yaml")} if folder.is_dir() else set()
+    try:
+        names |= {n.removesuffix(".yaml") for n in ConfigStore.instance().list(group)}
+    except OSError:  # no node stored under that group
+        pass
+    return sorted(names)
 
 
 def to_experiment(cfg: DictConfig) -> ExperimentConfig:
-    """Turn a composed config into the typed dataclass, running every ``__post_init__`` check."""
+    """Turn a composed config into its typed dataclass (a protocol's subclass of
+    :class:`ExperimentConfig`), running every ``__post_init__`` check."""
     try:
         obj = OmegaConf.to_object(cfg)
     except ConfigError:
@@ -79,3 +81,9 @@ def apply_overrides(base, prefix: str, overrides: list[str] | None = None):
         raise
     except Exception as exc:
         raise ConfigError(str(exc).strip().splitlines()[0]) from None
+
+
+def stored_group(schema, stored: DictConfig, name: str):
+    """The config group ``name`` of a run's stored config on its schema (defaults for the fields
+    the stored config lacks), as a structured DictConfig ready for :func:`apply_overrides`."""
+    return OmegaConf.merge(OmegaConf.structured(schema), stored.get(name, {}))

@@ -17,7 +17,7 @@ still ranked for the report); nothing accepted beyond it: ``unknown``. Accepted 
 leave more than ``1 − min_explained`` of the nominal excess, and more than ``none_tolerance`` of
 the floor, are a partial explanation of something else: the verdict is ``unknown`` too, and they
 are kept in ``Selection.partial`` (and the stages) for the report. ``rules`` must have both
-tolerances set (:meth:`DiagnosisConfig.for_protocol`).
+tolerances set (:meth:`DiagnosisConfig.with_rules`).
 """
 
 from __future__ import annotations
@@ -28,7 +28,7 @@ import numpy as np
 
 from armlab.config.diagnosis import DiagnosisConfig
 from armlab.config.effects import EFFECTS
-from armlab.diagnosis.joint_models import FittedModel, ModelFamily, Surrogate, fit_model
+from armlab.diagnosis.families import FittedModel, ModelFamily, Surrogate, fit_model
 
 __all__ = [
     "Selection",
@@ -84,7 +84,7 @@ def select_effects(
     rules: DiagnosisConfig,
     *,
     band_share: float,
-    family: ModelFamily | None = None,
+    family: ModelFamily,
 ) -> Selection:
     """Greedy selection of up to ``rules.max_effects`` effects (see the module docstring).
 
@@ -97,10 +97,12 @@ def select_effects(
             ``min_step_fraction``, ``min_floor_fraction``, ``min_first_explained``,
             ``none_tolerance``, ``indistinct_ratio``).
         band_share: (band width) / (Nyquist frequency) of the scoring band, for ``n_eff``.
-        family: the protocol's model family (default: the 1-DoF joint's).
+        family: the protocol's model family.
     """
     if rules.none_tolerance is None or rules.min_explained is None:
-        raise ValueError("select_effects needs none_tolerance and min_explained set (for_protocol)")
+        raise ValueError(
+            "select_effects needs none_tolerance and min_explained set (DiagnosisConfig.with_rules)"
+        )
     nominal = fit_model(trials, y_band, (), hp, family=family)
     stages = [nominal]
     gap0, _, _ = held_out_gap(nominal, trials, y_band)

@@ -29,7 +29,7 @@ def _rate(flags) -> float | None:
 
 
 def summarise(cases: list[dict]) -> dict:
-    """Aggregate per-case scores (see :func:`armlab.diagnosis.referee.score_case`)."""
+    """Aggregate per-case scores (see :func:`armlab.protocols.joint_1dof.diagnosis.referee.score_case`)."""
     classes = list(dict.fromkeys(c["class"] for c in cases))
     labels = sorted({c["predicted"] for c in cases} | {"none", "unknown"})
     confusion = {k: {lab: 0 for lab in labels} for k in classes}

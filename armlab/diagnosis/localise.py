@@ -153,7 +153,7 @@ def frf_parameters(trial, torque: np.ndarray, *, band_hz=(1.0, 20.0), nperseg: i
     The impedance ``Z = -torque/position`` (torque resists the motion) by the project's Welch
     estimate (:func:`armlab.estimation.frf.estimate_frf`, half-overlapping segments), then Levy's
     least squares of ``K + B·s + I·s²`` over the band, the integer fit of ``armlab fit-joint``
-    (:mod:`armlab.protocols.joint_frf`). Run on measured and on simulated torque, the difference
+    (:mod:`armlab.protocols.joint_1dof.frf`). Run on measured and on simulated torque, the difference
     is the bias a model error leaves in the identified parameters.
     """
     z = estimate_frf(

@@ -4,6 +4,10 @@
 only inside its functions.
 """
 
+from armlab.viz.cond_diagnosis import (
+    cond_diagnosis_figures,
+    cond_diagnosis_recording,
+)
 from armlab.viz.diagnosis import (
     diagnosis_figures,
     diagnosis_recording,
@@ -45,6 +49,8 @@ __all__ = [
     "format_vfs_tables",
     "plot_vfs_figures",
     "write_vfs_recording",
+    "cond_diagnosis_figures",
+    "cond_diagnosis_recording",
     "diagnosis_figures",
     "diagnosis_recording",
 ]

@@ -1,6 +1,7 @@
 """Figures and the Rerun recording of ``armlab diagnose`` (where the gap is, how far it shrinks).
 
-Inputs are what :func:`armlab.diagnosis.diagnose.diagnose_joint` returns: ``results`` (pooled, or
+Inputs are what :func:`armlab.protocols.joint_1dof.diagnosis.diagnose.diagnose_joint` returns: ``results``
+(pooled, or
 per trial with a ``per_trial`` list; the same keys as ``results.json``, see
 ``docs/diagnosis_schema.md``) and ``series`` — ``{"all": group}`` when pooled, ``{trial name:
 group}`` per trial — where each group holds ``trials`` (prepared trials with ``name``, ``t_s`` s,
@@ -232,7 +233,7 @@ def diagnosis_figures(
 
     Args:
         series: ``{"all": group}`` (pooled) or ``{trial name: group}`` (per trial), as returned by
-            :func:`armlab.diagnosis.diagnose.diagnose_joint`.
+            :func:`armlab.protocols.joint_1dof.diagnosis.diagnose.diagnose_joint`.
         results: the matching results dict.
         out_dir: folder to write into (created if needed).
 
@@ -305,7 +306,7 @@ def diagnosis_recording(
 
     Args:
         series: ``{"all": group}`` or ``{trial name: group}`` as returned by
-            :func:`armlab.diagnosis.diagnose.diagnose_joint`.
+            :func:`armlab.protocols.joint_1dof.diagnosis.diagnose.diagnose_joint`.
         path: the ``.rrd`` file to write; must not exist.
         app_id: the Rerun application id.
 

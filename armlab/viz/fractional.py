@@ -1,6 +1,6 @@
 """Figures, table and Rerun recording of the ``fractional_elbow`` protocol (Figs. 4–6, Table I of seeds/004).
 
-Inputs are what :func:`armlab.protocols.fractional_elbow.estimate_fractional` returns, or the same
+Inputs are what :func:`armlab.protocols.fractional_elbow.experiment.estimate_fractional` returns, or the same
 keys read back from a run directory:
 
 ``series`` (plain dict of arrays):

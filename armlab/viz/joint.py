@@ -1,6 +1,6 @@
 """Bode figure of joint-impedance fits of real recordings (``armlab fit-joint``).
 
-Input: ``{trial name: series}`` as returned by :func:`armlab.protocols.joint_frf.fit_joint_frf`
+Input: ``{trial name: series}`` as returned by :func:`armlab.protocols.joint_1dof.frf.fit_joint_frf`
 (``f_hz``, complex ``Z`` in N·m/rad, ``Z_fits`` with ``integer`` and ``fractional``). One column
 per trial: magnitude (dB re 1 N·m/rad) above, phase (deg) below; measured points, the integer
 ``I s² + B s + K`` fit and the fractional ``I s² + B s^alpha + K`` fit.

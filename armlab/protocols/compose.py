@@ -1,0 +1,119 @@
+"""Composing a protocol's typed experiment with Hydra, with one-line errors for every bad override.
+
+Each protocol composes only its own groups (its schema's fields): an override of a group it does
+not read is a :class:`~armlab.errors.ConfigError` naming the groups it does read.
+"""
+
+from __future__ import annotations
+
+from dataclasses import fields, is_dataclass
+
+from armlab.config.schema import ExperimentConfig
+from armlab.config.store import CONFIG_DIR, available_options, to_experiment
+from armlab.errors import ConfigError
+from armlab.protocols import registry
+from armlab.protocols.base import Protocol
+
+__all__ = [
+    "compose",
+    "config_groups",
+    "split_protocol",
+]
+
+
+def split_protocol(overrides: list[str]) -> tuple[Protocol, list[str]]:
+    """(the protocol chosen by ``protocol=<name>`` or the default, the other overrides)."""
+    chosen = [o for o in overrides if o.partition("=")[0].lstrip("+") == "protocol"]
+    rest = [o for o in overrides if o not in chosen]
+    runnable = registry.names("run")
+    if len(chosen) > 1:
+        raise ConfigError(f"protocol given {len(chosen)} times ({chosen}); give one of {runnable}")
+    name = chosen[0].partition("=")[2] if chosen else registry.DEFAULT_PROTOCOL
+    if "," in name:
+        raise ConfigError(
+            f"protocol={name}: a sweep over protocols is not supported (each composes its own groups); "
+            f"run one protocol per sweep, one of {runnable}"
+        )
+    return registry.get(name, need="run"), rest
+
+
+def config_groups(protocol: Protocol) -> list[str]:
+    """The config groups a protocol reads (its schema's dataclass fields)."""
+    default = protocol.schema()
+    return [f.name for f in fields(default) if is_dataclass(getattr(default, f.name))]
+
+
+def _check(protocol: Protocol, overrides: list[str]) -> None:
+    groups = config_groups(protocol)
+    keys = [f.name for f in fields(protocol.schema) if f.name not in groups and f.name != "protocol_name"]
+    seen: dict[str, str] = {}
+    for item in overrides:
+        key, sep, value = item.partition("=")
+        if not sep:
+            raise ConfigError(f"argument {item!r} must look like key=value (e.g. seed=3, arm=planar_linear)")
+        bare = key.lstrip("+~")
+        top = bare.split(".", 1)[0]
+        if top == "hydra":
+            continue
+        if bare in seen:
+            raise ConfigError(f"{bare} is given twice ({seen[bare]!r} and {item!r}); give it once")
+        seen[bare] = item
+        if top not in groups and top not in keys:
+            raise ConfigError(
+                f"{item}: {top!r} is not read by protocol {protocol.name!r}; its groups: {groups}"
+                f" (and {', '.join(keys)})"
+            )
+        if bare == "effects":
+            names = [n.strip() for n in value.strip().strip("[]").split(",") if n.strip()]
+            unknown = [n for n in names if n not in available_options("effects")]
+            if unknown:
+                raise ConfigError(f"unknown effect(s) {unknown}; valid: {available_options('effects')}")
+        elif bare in groups and "." not in bare and value not in available_options(bare):
+            raise ConfigError(f"unknown {bare} {value!r}; valid: {available_options(bare)}")
+    selected = [
+        n.strip()
+        for o in overrides
+        if o.lstrip("+").startswith("effects=")
+        for n in o.partition("=")[2].strip("[] ").split(",")
+    ]
+    for item in overrides:
+        parts = item.partition("=")[0].split(".")
+        if parts[0] == "effects" and len(parts) > 2 and parts[1] not in selected:
+            raise ConfigError(
+                f"{item}: effect {parts[1]!r} is not switched on; add effects=[{parts[1]}] "
+                f"(selected: {selected or 'none'})"
+            )
+
+
+def compose(overrides: list[str]):
+    """Compose and validate one protocol's experiment.
+
+    Args:
+        overrides: ``protocol=<name>`` (default: the registry's default protocol) and Hydra
+            overrides of that protocol's groups (``seed=3``, ``arm=planar_linear``,
+            ``estimator.lowpass_hz=30``, ``effects=[joint_friction]``).
+
+    Returns:
+        (the composed DictConfig, the typed experiment: an instance of the protocol's schema).
+
+    Raises:
+        ConfigError: a bad override, naming the valid choices.
+    """
+    from hydra import compose as hydra_compose
+    from hydra import initialize_config_dir
+    from hydra.errors import HydraException
+    from omegaconf.errors import OmegaConfBaseException
+
+    protocol, rest = split_protocol(overrides)
+    _check(protocol, rest)
+    try:
+        with initialize_config_dir(config_dir=str(CONFIG_DIR), version_base="1.3"):
+            cfg = hydra_compose(
+                config_name=protocol.name, overrides=[o for o in rest if not o.startswith("hydra")]
+            )
+    except (HydraException, OmegaConfBaseException) as exc:
+        raise ConfigError(str(exc).strip().splitlines()[0]) from None
+    exp = to_experiment(cfg)
+    if not isinstance(exp, protocol.schema) or not isinstance(exp, ExperimentConfig):
+        raise ConfigError(f"composed config is a {type(exp).__name__}, not {protocol.schema.__name__}")
+    return cfg, exp

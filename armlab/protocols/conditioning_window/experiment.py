@@ -1,0 +1,265 @@
+"""Protocol ``conditioning_window``: the observation-window study of the conditioning paper.
+
+Glue from config to scenario to the simulated lab to estimation to results (../shared/seeds/000):
+26 windows, each with its own 30 trials perturbed by a quintic of duration T_k; the full
+11-parameter and the reduced 8-parameter least squares on T_obs = T_k + 70 ms of 29 trials; the
+30th trial validates; the criteria of section III-C per window, and the first window from which
+each criterion holds for good. Pure computation: files and figures are written by
+:mod:`armlab.runner.run`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from armlab.config.schema import EstimatorConfig, ExperimentConfig
+from armlab.data.trial import TrialSet
+from armlab.errors import ConfigError, DataError
+from armlab.estimation import criteria
+from armlab.estimation.joint_ls import LSEstimate, estimate_windows, validate
+from armlab.estimation.processing import JointSignals, ProcessingConfig, joint_signals
+from armlab.perturbations.scenario import Scenario, draw_trials, load_scenario
+from armlab.sim.lab import LabRecording, record_trials
+
+__all__ = [
+    "PAPER_THRESHOLDS_S",
+    "PAPER_XI",
+    "WindowSpec",
+    "estimate_protocol",
+    "linearisation_bias",
+    "simulate_protocol",
+    "window_specs",
+]
+
+# kg m^2, xi fixed in the paper's reduced model (section IV-D)
+PAPER_XI = np.array([0.391, 0.155, 0.149])
+# s, the paper's findings (section IV-D): K positive definite for T_obs > 320 ms, K and D
+# quasi-symmetric for T_obs > 370 ms, all parameters quasi-constant for T_obs > 400 ms.
+PAPER_THRESHOLDS_S = {"K_pd_after_s": 0.32, "symmetric_after_s": 0.37, "constant_after_s": 0.40}
+
+
+@dataclass(frozen=True, kw_only=True)
+class WindowSpec:
+    """One estimation window: the trials of group ``k`` over ``t_obs_s`` after onset."""
+
+    k: int
+    t_k_s: float
+    t_obs_s: float
+    extension: bool  # a window longer than T_k + 70 ms on the same trials (see scenario file)
+
+
+def window_specs(scenario: Scenario, estimator: EstimatorConfig) -> list[WindowSpec]:
+    """The paper's windows (T_obs = T_k + 70 ms) plus the scenario's extension windows.
+
+    With ``estimator.t_obs_s`` set, those windows are used on the longest-T_k group instead.
+    """
+    if estimator.t_obs_s is not None:
+        k = int(scenario.k_values[-1])
+        return [
+            WindowSpec(k=k, t_k_s=float(scenario.t_k_s[-1]), t_obs_s=float(t), extension=True)
+            for t in sorted(estimator.t_obs_s)
+        ]
+    specs = [
+        WindowSpec(k=int(k), t_k_s=float(tk), t_obs_s=float(to), extension=False)
+        for k, tk, to in zip(scenario.k_values, scenario.t_k_s, scenario.t_obs_s, strict=True)
+    ]
+    last = specs[-1]
+    specs += [
+        WindowSpec(k=last.k, t_k_s=last.t_k_s, t_obs_s=float(t), extension=True)
+        for t in scenario.extension_t_obs_s
+        if t > last.t_obs_s
+    ]
+    return specs
+
+
+def simulate_protocol(cfg: ExperimentConfig) -> tuple[LabRecording, Scenario]:
+    """Draw the seeded trial plan and record every trial in the simulated lab."""
+    scenario = load_scenario(cfg.scenario.name).subset(cfg.scenario.k_values, cfg.scenario.n_trials)
+    plan_rng, sensor_rng = np.random.default_rng(cfg.seed).spawn(2)
+    plan = draw_trials(scenario, plan_rng)
+    return record_trials(cfg, scenario, plan, sensor_rng), scenario
+
+
+def _check_windows(trials: TrialSet, specs: list[WindowSpec]) -> np.ndarray:
+    fs = trials.fs_hz
+    samples = np.array([int(round(s.t_obs_s * fs)) for s in specs])
+    available = trials.n_samples - int(np.max(trials.onset_index))
+    too_long = [s.t_obs_s for s, n in zip(specs, samples, strict=True) if n > available]
+    if too_long:
+        raise ConfigError(
+            f"observation window(s) {too_long} s are longer than the recorded data after onset "
+            f"({available / fs:.3f} s); valid: T_obs <= {available / fs:.3f} s"
+        )
+    return samples
+
+
+def _entry(est: LSEstimate, truth: dict | None, fit, reduced: bool) -> dict:
+    """One model's estimate in a window; errors against ground truth where it is known."""
+    out = {
+        "cond": float(est.cond),
+        "K": est.K.tolist(),
+        "D": est.D.tolist(),
+        "eig_Ks": criteria.eig_symmetric_part(est.K).tolist(),
+        "eig_Ds": criteria.eig_symmetric_part(est.D).tolist(),
+        "asym_K": float(criteria.asymmetry(est.K)),
+        "asym_D": float(criteria.asymmetry(est.D)),
+        "std": dict(zip(est.names, est.std.tolist(), strict=True)),
+        "rms_residual_Nm": float(est.rms_residual),
+        "validation": {"vaf_pct": fit.vaf.tolist(), "rmse_Nm": fit.rmse.tolist()},
+    }
+    if not reduced:
+        out["xi"] = est.xi.tolist()
+    if truth is not None:
+        out["K_rel_err"] = criteria.relative_error(est.K, np.asarray(truth["K"]))
+        out["D_rel_err"] = criteria.relative_error(est.D, np.asarray(truth["D"]))
+        if not reduced:
+            out["xi_rel_err"] = criteria.relative_error(est.xi, np.asarray(truth["xi"]))
+    return out
+
+
+def _criteria(t_obs: np.ndarray, ests: list[LSEstimate], cfg: EstimatorConfig) -> dict:
+    pd = np.array([criteria.is_positive_definite(e.K) for e in ests])
+    sym = np.array(
+        [
+            criteria.asymmetry(e.K) < cfg.symmetry_tol and criteria.asymmetry(e.D) < cfg.symmetry_tol
+            for e in ests
+        ]
+    )
+    params = np.stack([e.zeta for e in ests])
+    const = criteria.quasi_constant_flags(params, cfg.constancy_tol)
+    return {
+        "K_pd_from_s": criteria.first_satisfied(t_obs, pd),
+        "symmetric_from_s": criteria.first_satisfied(t_obs, sym),
+        "constant_from_s": criteria.first_satisfied(t_obs, const),
+    }
+
+
+def estimate_protocol(
+    trials: TrialSet, estimator: EstimatorConfig, specs: list[WindowSpec]
+) -> tuple[dict, dict]:
+    """Run both least-squares models on every window and score them against ground truth.
+
+    Args:
+        trials: recorded trials with ``hand_pos``, ``hand_force`` and trial_meta ``group``,
+            ``validate``; attrs ``arm_l1_m``, ``arm_l2_m`` and (simulated data) ``ground_truth``.
+        estimator: processing and criteria settings.
+        specs: the windows to estimate.
+
+    Returns:
+        (results dict — see docs/results_schema.md — , validation series for Fig. 6 of the
+        longest paper window).
+    """
+    for key in ("group", "validate"):
+        if key not in trials.trial_meta:
+            raise DataError(f"trials lack trial_meta[{key!r}]; have {sorted(trials.trial_meta)}")
+    samples = _check_windows(trials, specs)
+    proc = ProcessingConfig(
+        lowpass_hz=estimator.lowpass_hz, filter_order=estimator.filter_order, baseline_s=estimator.baseline_s
+    )
+    signals: JointSignals = joint_signals(
+        trials.channel("hand_pos"),
+        trials.channel("hand_force"),
+        trials.fs_hz,
+        trials.onset_index,
+        float(trials.attrs["arm_l1_m"]),
+        float(trials.attrs["arm_l2_m"]),
+        proc,
+    )
+    group = np.asarray(trials.trial_meta["group"])
+    held_out = np.asarray(trials.trial_meta["validate"], bool)
+    masks = np.stack([(group == s.k) & ~held_out for s in specs])
+    truth = trials.attrs.get("ground_truth")
+    xi_known = PAPER_XI if (estimator.xi_source == "paper" or truth is None) else np.asarray(truth["xi"])
+    full = estimate_windows(signals, masks, samples)
+    reduced = estimate_windows(signals, masks, samples, xi_known=xi_known)
+
+    windows = []
+    series = {}
+    for spec, n, e_full, e_red in zip(specs, samples, full, reduced, strict=True):
+        val = np.flatnonzero((group == spec.k) & held_out)
+        if val.size == 0:
+            raise DataError(f"window k={spec.k} has no validation trial (trial_meta 'validate')")
+        fit_f = validate(e_full, signals, int(val[0]), int(n))
+        fit_r = validate(e_red, signals, int(val[0]), int(n))
+        entry = {
+            "k": spec.k,
+            "T_k_s": spec.t_k_s,
+            "t_obs_s": spec.t_obs_s,
+            "extension": spec.extension,
+            "n_trials_identify": int(masks[len(windows)].sum()),
+        }
+        entry.update(_entry(e_full, truth, fit_f, reduced=False))
+        if truth:
+            entry.update({"K_true": truth["K"], "D_true": truth["D"], "xi_true": truth["xi"]})
+        entry["reduced"] = _entry(e_red, truth, fit_r, reduced=True)
+        entry["reduced"]["xi_known"] = xi_known.tolist()
+        windows.append(entry)
+        if not spec.extension:
+            series = {
+                "t_s": fit_f.t,
+                "dtau_measured": fit_f.dtau,
+                "dtau_full": fit_f.dtau_hat,
+                "dtau_reduced": fit_r.dtau_hat,
+                "t_obs_s": spec.t_obs_s,
+            }
+    t_obs = np.array([s.t_obs_s for s in specs])
+    results = {
+        "protocol": trials.attrs.get("protocol", "conditioning_window"),
+        "seed": trials.attrs.get("seed"),
+        "ground_truth": truth,
+        "paper": dict(PAPER_THRESHOLDS_S),
+        "criteria": {
+            "full": _criteria(t_obs, full, estimator),
+            "reduced": _criteria(t_obs, reduced, estimator),
+        },
+        "windows": windows,
+    }
+    return results, series
+
+
+def linearisation_bias(cfg: ExperimentConfig) -> dict:
+    """Error of the linear model of Eq. (9) on exact data from the configured muscle model.
+
+    The run's arm (muscle variant, co-contraction, pre-load) and trial plan are simulated again
+    with everything else that could bias the estimate removed: rigid cuff, ideal sensors, no
+    reflex, no low-pass filter. What error remains in the longest paper window is the bias of
+    linearising the muscles (plus MuJoCo's integration error, ~0.3 % on the linear variant):
+    the Hill muscle's force-length-velocity curves are not linear over the 0.05 rad perturbation.
+
+    Args:
+        cfg: the run's configuration.
+
+    Returns:
+        A ``linearisation_bias`` entry of results.json (docs/results_schema.md).
+    """
+    scenario = load_scenario(cfg.scenario.name).subset(cfg.scenario.k_values, cfg.scenario.n_trials)
+    exact = replace(
+        cfg,
+        cuff=replace(cfg.cuff, rigid=True),
+        reflex=replace(cfg.reflex, enabled=False),
+        sensors=replace(cfg.sensors, preset="ideal"),
+        estimator=replace(cfg.estimator, lowpass_hz=None, t_obs_s=None),
+        scenario=replace(cfg.scenario, k_values=[int(scenario.k_values[-1])]),
+    )
+    rec, scenario = simulate_protocol(exact)
+    specs = [s for s in window_specs(scenario, exact.estimator) if not s.extension]
+    results, _ = estimate_protocol(rec.trials, exact.estimator, specs)
+    w = results["windows"][-1]
+    return {
+        "muscle": cfg.arm.muscle,
+        "conditions": "rigid cuff, ideal sensors, reflex off, no low-pass filter",
+        "k": w["k"],
+        "t_obs_s": w["t_obs_s"],
+        "K": w["K"],
+        "D": w["D"],
+        "xi": w["xi"],
+        "K_true": w["K_true"],
+        "D_true": w["D_true"],
+        "xi_true": w["xi_true"],
+        "K_rel_err": w["K_rel_err"],
+        "D_rel_err": w["D_rel_err"],
+        "xi_rel_err": w["xi_rel_err"],
+        "reduced": {"K_rel_err": w["reduced"]["K_rel_err"], "D_rel_err": w["reduced"]["D_rel_err"]},
+    }

@@ -1,0 +1,99 @@
+"""The run-side hooks of ``conditioning_window``: simulate, re-estimate, outputs, printed table."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from armlab.config.schema import EstimatorConfig
+from armlab.config.store import apply_overrides, stored_group
+from armlab.data.trial import TrialSet
+from armlab.perturbations.scenario import load_scenario
+from armlab.protocols.base import OutputContext, Simulated
+from armlab.protocols.conditioning_window.config import ConditioningWindowConfig
+from armlab.protocols.conditioning_window.experiment import (
+    estimate_protocol,
+    linearisation_bias,
+    simulate_protocol,
+    window_specs,
+)
+
+__all__ = ["format_table", "outputs", "reestimate", "simulate"]
+
+
+def simulate(cfg: ConditioningWindowConfig) -> Simulated:
+    """Simulate every window's trials; estimation runs when the runner asks for it."""
+    rec, scenario = simulate_protocol(cfg)
+
+    def estimate() -> tuple[dict, dict]:
+        results, series = estimate_protocol(rec.trials, cfg.estimator, window_specs(scenario, cfg.estimator))
+        results["linearisation_bias"] = linearisation_bias(cfg)
+        return results, series
+
+    return Simulated(rec.trials, rec.scene.xml, {"scenario": scenario.name}, estimate)
+
+
+def reestimate(trials: TrialSet, stored, overrides: list[str]) -> dict:
+    """Estimation again with ``estimator.<field>=<value>`` overrides of the stored settings."""
+    estimator = apply_overrides(stored_group(EstimatorConfig, stored, "estimator"), "estimator", overrides)
+    scenario = load_scenario(str(trials.attrs.get("scenario", "conditioning_window")))
+    groups = sorted(set(np.asarray(trials.trial_meta["group"]).tolist()))
+    scenario = scenario.subset(k_values=groups, n_trials=None)
+    results, _ = estimate_protocol(trials, estimator, window_specs(scenario, estimator))
+    return results
+
+
+def outputs(ctx: OutputContext) -> dict:
+    """Figs. 4-6 of the paper, the error plot and the recording of every trial."""
+    viz, out_dir, results, cfg = ctx.viz, ctx.out_dir, ctx.results, ctx.cfg
+    written = {}
+    if cfg.output.figures:
+        written["fig4"] = viz.plot_window_sweep(results, out_dir / "fig4_full.png", model="full")
+        written["fig5"] = viz.plot_window_sweep(results, out_dir / "fig5_reduced.png", model="reduced")
+        written["fig6"] = viz.plot_validation(ctx.series, out_dir / "fig6_validation.png")
+        written["errors"] = viz.plot_error_vs_window(results, out_dir / "errors.png")
+    if cfg.output.recording:
+        written["recording"] = viz.write_recording(out_dir / "trials.rrd", ctx.trials, results)
+    return written
+
+
+def _fmt(x) -> str:
+    return "  -  " if x is None else f"{x * 1000:.0f} ms"
+
+
+def format_table(results: dict, viz=None) -> str:
+    """The window sweep as text: per window the conditioning, K eigenvalues, errors and VAF."""
+    lines = [
+        "T_obs  k  ext |   cond  |  eig(K_s)       | K err  D err  xi err | reduced K err  D err | "
+        "VAF1  VAF2",
+    ]
+    for w in results["windows"]:
+        red = w.get("reduced", {})
+        lines.append(
+            f"{w['t_obs_s'] * 1000:4.0f}ms {w['k']:2d}  {'*' if w['extension'] else ' '}  | "
+            f"{w.get('cond', float('nan')):7.0f} | "
+            f"{w['eig_Ks'][0]:6.2f} {w['eig_Ks'][1]:6.2f}  | {w.get('K_rel_err', float('nan')) * 100:5.1f}% "
+            f"{w.get('D_rel_err', float('nan')) * 100:5.1f}% "
+            f"{w.get('xi_rel_err', float('nan')) * 100:5.1f}% | "
+            f"{red.get('K_rel_err', float('nan')) * 100:11.1f}%  "
+            f"{red.get('D_rel_err', float('nan')) * 100:5.1f}% | "
+            f"{w['validation']['vaf_pct'][0]:4.0f}% {w['validation']['vaf_pct'][1]:4.0f}%"
+        )
+    for model in ("full", "reduced"):
+        c = results["criteria"][model]
+        lines.append(
+            f"{model:8s} criteria first met: K pos. def. {_fmt(c['K_pd_from_s'])}, quasi-symmetric "
+            f"{_fmt(c['symmetric_from_s'])}, quasi-constant {_fmt(c['constant_from_s'])}"
+        )
+    p = results["paper"]
+    lines.append(
+        f"paper (seeds/000 IV-D): K pos. def. > {p['K_pd_after_s'] * 1000:.0f} ms, quasi-symmetric > "
+        f"{p['symmetric_after_s'] * 1000:.0f} ms, quasi-constant > {p['constant_after_s'] * 1000:.0f} ms"
+    )
+    if "linearisation_bias" in results:
+        b = results["linearisation_bias"]
+        lines.append(
+            f"linearisation bias ({b['muscle']} muscles, {b['conditions']}) at T_obs = "
+            f"{b['t_obs_s'] * 1000:.0f} ms: K {b['K_rel_err'] * 100:.2f} %, D {b['D_rel_err'] * 100:.2f} %, "
+            f"xi {b['xi_rel_err'] * 100:.2f} %"
+        )
+    return "\n".join(lines)

@@ -1,0 +1,331 @@
+"""Protocol ``fractional_elbow``: fractional-order identification of the elbow (seeds/004).
+
+The direct-drive motor applies a random-phase multisine force (0.12-15 Hz, <= 5 N, 40 s, 2 kHz)
+to the hand while the elbow holds the pointer at zero; per trial the angle is low-passed by the
+zero-phase FIR of Sec. III-B, ``G = theta / F_measured`` (Eq. (22)) is estimated by Welch's method,
+the trials' responses are averaged, and Levy's method fits the paper's structures (27), (28),
+(29), A and B (the fractional ones by an alpha sweep) plus, for a known fractional answer, the
+inertia-springpot-spring family ``b0 / (1 + a s^beta + a2 s²)`` swept over beta. Indices MSE, MAD
+and R² (Eqs. (24)-(26)), bandwidths, and the five-element reading of the integer third-order
+model are scored against the simulated ground truth. Pure computation: files are written by
+:mod:`armlab.runner.run`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+
+import numpy as np
+
+from armlab.config.schema import ExperimentConfig, FrfConfig
+from armlab.data.trial import TrialSet
+from armlab.errors import ConfigError, DataError, EstimationError
+from armlab.estimation.arm_tf_models import (
+    LITERATURE_MODELS,
+    CommensurateTF,
+    FiveElement,
+    bandwidth_hz,
+    five_element_from_tf,
+)
+from armlab.estimation.criteria import relative_error
+from armlab.estimation.five_element_fit import (
+    best_five_element,
+    five_element_guesses,
+    five_element_response,
+    fractional_five_element_sweep,
+)
+from armlab.estimation.frf import FirLowpassSpec, average_responses, design_fir_lowpass, estimate_frf
+from armlab.estimation.levy import PAPER_STRUCTURES, LevyFit, alpha_grid, levy_fit, levy_sweep
+from armlab.models.direct_drive_scene import DirectDriveScene, build_direct_drive_scene
+from armlab.models.elbow_truth import ElbowTruth, elbow_truth
+from armlab.perturbations.multisine import ForceScenario, load_force_scenario, multisine
+from armlab.sensors.channel import ChannelSpec
+from armlab.sensors.presets import DD_ENCODER, JR3_FORCE
+from armlab.sim.force_control import simulate_force_trial
+
+__all__ = [
+    "FractionalRecording",
+    "PAPER_TABLE_I",
+    "estimate_fractional",
+    "simulate_fractional",
+    "time_overlay",
+]
+
+_FIVE = ("M", "k1", "k2", "d1", "d2")
+# Table I of seeds/004: alpha, MSE (x1e-7), MAD (x1e-4), R², number of parameters
+PAPER_TABLE_I = {
+    "27": {"alpha": 1.0, "mse": 2.70e-7, "mad": 3.52e-4, "r2": 0.94, "n_params": 5},
+    "28": {"alpha": 1.4, "mse": 5.14e-7, "mad": 5.01e-4, "r2": 0.89, "n_params": 4},
+    "29": {"alpha": 1.1, "mse": 8.4e-7, "mad": 6.37e-4, "r2": 0.82, "n_params": 3},
+    "A": {"alpha": 1.0, "mse": 11.52e-7, "mad": 6.71e-4, "r2": 0.8, "n_params": 3},
+    "B": {"alpha": 1.0, "mse": 11.59e-7, "mad": 6.72e-4, "r2": 0.8, "n_params": 4},
+}
+# m/s² rms, noise of the JR3's built-in accelerometer used by the inertia compensation
+# (assumption: strain-gauge sensor accelerometers resolve of order 0.1 m/s²) -> /L rad/s²
+_ACCEL_NOISE_M_S2 = 0.1
+_SKIP_S = 5.0  # s, start-up transient left out of the time-domain comparison (Fig. 5)
+_NFFT = 18000  # FFT length of the paper's Welch estimate ("18000 samples", Sec. III-B)
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
+class FractionalRecording:
+    """What :func:`simulate_fractional` returns: the trials and how they were made."""
+
+    trials: TrialSet
+    scenario: ForceScenario
+    truth: ElbowTruth
+    scene: DirectDriveScene
+
+
+def simulate_fractional(cfg: ExperimentConfig) -> FractionalRecording:
+    """Simulate every trial of the protocol (``cfg.scenario.n_trials`` of them, or the scenario's)."""
+    scenario = load_force_scenario(cfg.scenario.name, cfg.scenario.n_trials)
+    if abs(cfg.sensors.fs_hz - scenario.fs_hz) > 1e-9:
+        raise ConfigError(
+            f"sensors.fs_hz = {cfg.sensors.fs_hz} Hz differs from the scenario's {scenario.fs_hz} Hz; "
+            f"valid: sensors.fs_hz={scenario.fs_hz:g}"
+        )
+    scene = build_direct_drive_scene(cfg.elbow, cfg.sim)
+    truth = elbow_truth(scene, cfg.elbow, scenario.fs_hz)
+    ideal = cfg.sensors.preset == "ideal"
+    force_spec, enc_spec = (ChannelSpec(), ChannelSpec()) if ideal else (JR3_FORCE, DD_ENCODER)
+    accel_noise = 0.0 if ideal else _ACCEL_NOISE_M_S2 / scene.link_length
+    rngs = np.random.default_rng(cfg.seed).spawn(scenario.n_trials)
+    trials = []
+    for rng in rngs:
+        plan_rng, noise_rng = rng.spawn(2)
+        f_ref = multisine(scenario, plan_rng)
+        trials.append(
+            simulate_force_trial(
+                scene,
+                f_ref,
+                scenario.fs_hz,
+                scenario.settle_s,
+                cfg.elbow,
+                cfg.reflex,
+                cfg.motor,
+                force_spec,
+                enc_spec,
+                noise_rng,
+                accel_noise_rad_s2=accel_noise,
+            )
+        )
+    names = {
+        "f_ref": "N",
+        "f_measured": "N",
+        "theta_measured": "rad",
+        "current": "A",
+        "tau_motor": "N*m",
+        "f_true": "N",
+        "theta_true": "rad",
+        "phi_true": "rad",
+    }
+    channels = {k: np.stack([getattr(t, k) for t in trials])[..., None] for k in names}
+    channels["true_activation"] = np.stack([t.activation for t in trials])
+    units = {**names, "true_activation": "1"}
+    trial_set = TrialSet(
+        fs_hz=scenario.fs_hz,
+        onset_index=np.full(len(trials), 1, dtype=np.int64),  # the force starts at the first sample
+        channels=channels,
+        units=units,
+        trial_meta={"tracking_error": np.array([t.tracking_error for t in trials])},
+        attrs={
+            "protocol": "fractional_elbow",
+            "seed": cfg.seed,
+            "link_length_m": scene.link_length,
+            "ground_truth": truth.as_dict(),
+        },
+    )
+    return FractionalRecording(trials=trial_set, scenario=scenario, truth=truth, scene=scene)
+
+
+def _ffe_bandwidth(element: FiveElement, beta: float) -> float | None:
+    """-3 dB bandwidth of the fractional five-element model (None if |G| never falls 3 dB)."""
+    try:
+        return bandwidth_hz(
+            lambda ff: five_element_response(element, ff, beta), 1.0 / element.k1 + 1.0 / element.k2
+        )
+    except EstimationError:
+        return None
+
+
+def _fit_entry(fit: LevyFit, truth_g: np.ndarray | None, f: np.ndarray) -> dict:
+    out = fit.summary()
+    if truth_g is not None:  # |fit| against |truth| on the same band, relative RMS
+        out["rel_rms_error_vs_truth"] = relative_error(np.abs(fit.response(f)), np.abs(truth_g))
+    return out
+
+
+def estimate_fractional(
+    trials: TrialSet, frf_cfg: FrfConfig, truth: ElbowTruth | None = None
+) -> tuple[dict, dict]:
+    """Frequency response, Levy fits and scores (Sec. II-IV of seeds/004).
+
+    Args:
+        trials: recorded trials with channels ``f_measured`` (N) and ``theta_measured`` (rad) and
+            attr ``link_length_m``.
+        frf_cfg: processing and fitting settings.
+        truth: the simulated ground truth, or None for real data.
+
+    Returns:
+        (results dict, series for the figures: frequency grid, measured and fitted responses).
+    """
+    for key in ("f_measured", "theta_measured"):
+        if key not in trials.channels:
+            raise DataError(f"trials lack channel {key!r}; have {sorted(trials.channels)}")
+    if "link_length_m" not in trials.attrs:
+        raise DataError(
+            "trials lack attr 'link_length_m' (m, motor axis to handle): it converts theta/F into the "
+            "five-element model's m/N; add it to the trial file's attrs"
+        )
+    fs = trials.fs_hz
+    frf_cfg.check_recording(fs, trials.n_samples, "trial")
+    lo, hi = frf_cfg.band_hz
+    fir = design_fir_lowpass(
+        FirLowpassSpec(
+            pass_hz=frf_cfg.fir_pass_hz,
+            stop_hz=frf_cfg.fir_stop_hz,
+            ripple_db=frf_cfg.fir_ripple_db,
+            attenuation_db=frf_cfg.fir_attenuation_db,
+            fs_hz=fs,
+        )
+    )
+    force = trials.channel("f_measured")[..., 0]
+    if frf_cfg.filter_force:  # same zero-phase filter on both: its pass-band ripple cancels in G
+        force = fir.apply(force, axis=-1)
+    theta = fir.apply(trials.channel("theta_measured")[..., 0], axis=-1)
+    nfft = max(_NFFT, frf_cfg.welch_window)
+    per_trial = [
+        estimate_frf(u, y, fs, window_len=frf_cfg.welch_window, overlap=frf_cfg.welch_overlap, nfft=nfft)
+        for u, y in zip(force, theta, strict=True)
+    ]
+    frf = average_responses(per_trial).band(lo, hi)
+    f, G = frf.f_hz, frf.G
+    truth_g = truth.response(f) if truth is not None else None
+
+    fits = {}
+    for key, structure in PAPER_STRUCTURES.items():
+        if structure.alpha is not None:
+            fit = levy_fit(f, G, structure)
+        else:
+            fit = levy_sweep(f, G, structure, alphas=alpha_grid(frf_cfg.alpha_step)).best
+        fits[key] = fit
+
+    results = {
+        "protocol": trials.attrs.get("protocol", "fractional_elbow"),
+        "seed": trials.attrs.get("seed"),
+        "ground_truth": trials.attrs.get("ground_truth"),
+        "n_trials": trials.n_trials,
+        "tracking_error": np.asarray(trials.trial_meta.get("tracking_error", [])).tolist(),
+        "frf": {
+            "n_freq": int(f.size),
+            "band_hz": [lo, hi],
+            "mean_coherence": float(np.mean(frf.coherence)),
+            "settings": dataclasses.asdict(frf_cfg),
+        },
+        "fir": {"taps": int(fir.taps.size), "ripple_db": fir.ripple_db, "attenuation_db": fir.attenuation_db},
+        "models": {k: _fit_entry(v, truth_g, f) for k, v in fits.items()},
+        "paper_table_I": PAPER_TABLE_I,
+        "literature_bandwidth_hz": {name: tf.bandwidth_hz() for name, tf in LITERATURE_MODELS.items()},
+    }
+    L = float(trials.attrs["link_length_m"])
+    m27 = fits["27"].model
+    # theta/F (rad/N) -> handle displacement per force (m/N): multiply by L
+    t27 = CommensurateTF(b=m27.b * L, a=m27.a, name="(27)", units="m/N")
+    G_m = G * L
+    try:  # the reading of model (27) is the paper's start; a shape-based guess when it has none
+        start = five_element_from_tf(t27)
+        reading = {k: getattr(start.element, k) for k in _FIVE}
+        starts, mismatch = [start.element], start.mismatch
+    except EstimationError:
+        reading, mismatch, starts = None, None, []
+    fe = best_five_element(f, G_m, starts + five_element_guesses(f, G_m))
+    sweep = fractional_five_element_sweep(f, G_m, fe, step=frf_cfg.alpha_step)
+    results["five_element_fit"] = {
+        "M": fe.M,
+        "k1": fe.k1,
+        "k2": fe.k2,
+        "d1": fe.d1,
+        "d2": fe.d2,
+        "from_model_27": reading,
+        "mismatch_27": mismatch,
+    }
+    results["fractional_five_element"] = {
+        "best_order": sweep.best_beta,
+        "orders": sweep.betas,
+        "cost": sweep.cost,
+        "mse": [ix.mse / L**2 for ix in sweep.indices],  # (rad/N)², comparable with Table I
+        "best_indices": {  # Eqs. (24)-(26) on |G| in rad/N, as Table I
+            "mse": sweep.indices[sweep.best_index].mse / L**2,
+            "mad": sweep.indices[sweep.best_index].mad / L,
+            "r2": sweep.indices[sweep.best_index].r2,
+            "n_params": 5,  # M, k1, k2, d1, d2 (the order excluded, as alpha in Table I)
+            "bandwidth_hz": _ffe_bandwidth(sweep.best, sweep.best_beta),
+        },
+        "best": {k: getattr(sweep.best, k) for k in ("M", "k1", "k2", "d1", "d2")},
+    }
+    if truth is not None:
+        names = _FIVE
+        tf = truth.five_element
+        if truth.fractional_order is None:
+            results["five_element_rel_err"] = {n: abs(getattr(fe, n) / getattr(tf, n) - 1) for n in names}
+        else:
+            frac = results["fractional_five_element"]
+            frac["true_order"] = truth.fractional_order
+            frac["order_error"] = abs(sweep.best_beta - truth.fractional_order)
+            frac["rel_err"] = {n: abs(getattr(sweep.best, n) / getattr(tf, n) - 1) for n in names}
+    models = {k: v.response for k, v in fits.items()}
+    models["fractional_five_element"] = lambda ff: five_element_response(sweep.best, ff, sweep.best_beta) / L
+    overlay = time_overlay(force[0], theta[0], fs, models, (lo, hi))
+    results["time_vaf_pct"] = overlay["vaf_pct"]
+    series = {
+        "f_hz": f,
+        "G": G,
+        "coherence": frf.coherence,
+        "G_true": truth_g,
+        "fits": {k: model(f) for k, model in models.items()},
+        "literature": {
+            name: tf.response(f) / (L if tf.units == "m/N" else 1.0) for name, tf in LITERATURE_MODELS.items()
+        },
+        "time": overlay,
+    }
+    return results, series
+
+
+def time_overlay(
+    force: np.ndarray,
+    theta: np.ndarray,
+    fs: float,
+    models: dict,
+    band_hz: tuple[float, float],
+    skip_s: float = _SKIP_S,
+) -> dict:
+    """Each model's angle for the measured force of one trial, beside the measured angle (Fig. 5).
+
+    The multisine repeats every trial length (its lines lie on the ``1 / T`` grid), so the
+    steady-state response is the periodic convolution ``irfft(G(f) rfft(F))``. Model and measured
+    angle are both limited to the fitting band ``band_hz`` (the models are not fitted, and the
+    force holds no lines, outside it); ``skip_s`` of start-up transient (the arm starts at rest)
+    are left out of the VAF and of the returned series. Means are removed.
+
+    Returns:
+        dict with ``t_s``, ``force_N``, ``theta_rad`` and ``models`` ({name: angle}) from
+        ``skip_s`` on, and ``vaf_pct`` ({name: VAF %}).
+    """
+    n = force.size
+    fk = np.fft.rfftfreq(n, 1.0 / fs)
+    keep = (fk >= band_hz[0]) & (fk <= band_hz[1])
+    spectrum = np.fft.rfft(force - force.mean())
+    i0 = int(round(skip_s * fs))
+    y = np.fft.irfft(np.where(keep, np.fft.rfft(theta), 0.0), n)[i0:]
+    y = y - y.mean()
+    out = {"t_s": np.arange(i0, n) / fs, "force_N": force[i0:], "theta_rad": y, "models": {}, "vaf_pct": {}}
+    for name, response in models.items():
+        g = np.zeros(fk.size, dtype=complex)
+        g[keep] = response(fk[keep])
+        yh = np.fft.irfft(g * spectrum, n)[i0:]
+        yh = yh - yh.mean()
+        out["models"][name] = yh
+        out["vaf_pct"][name] = float(100.0 * (1.0 - np.var(y - yh) / np.var(y)))
+    return out

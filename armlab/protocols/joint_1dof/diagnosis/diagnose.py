@@ -1,0 +1,192 @@
+"""``armlab diagnose`` for the 1-DoF joint protocol: where, which effect, how far it shrinks.
+
+Pure computation: imported trials and a :class:`DiagnosisConfig` in, a JSON-ready results dict
+and the signals for figures/recordings out (files are written by the CLI; see
+``docs/diagnosis_schema.md`` for every key).
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict
+
+import numpy as np
+from scipy import signal
+
+from armlab.config.diagnosis import DiagnosisConfig
+from armlab.diagnosis.attribution import held_out_gap, select_effects
+from armlab.diagnosis.families import FittedModel
+from armlab.diagnosis.localise import band_breakdown, frf_parameters, residual_tests, window_breakdown
+from armlab.errors import ConfigError
+from armlab.protocols.joint_1dof.diagnosis.data import highpass_sos, noise_floor, prepare_trials
+from armlab.protocols.joint_1dof.diagnosis.models import JOINT_FAMILY, JOINT_SURROGATES
+from armlab.protocols.joint_1dof.diagnosis.rules import RULES
+
+__all__ = [
+    "candidate_names",
+    "prepare_scoring",
+    "diagnose_joint",
+]
+
+
+def candidate_names(cfg: DiagnosisConfig, surrogates=None, protocol: str = "joint_1dof") -> list[str]:
+    """The candidate list after ``candidates`` / ``exclude`` (unknown names raise ConfigError).
+
+    ``surrogates``: the protocol's candidates by name (default: the joint_1dof ones).
+    """
+    valid = list(JOINT_SURROGATES if surrogates is None else surrogates)
+    chosen = list(cfg.candidates) if cfg.candidates is not None else valid
+    for name in [*chosen, *cfg.exclude]:
+        if name not in valid:
+            raise ConfigError(f"unknown candidate effect {name!r} for {protocol}; valid: {valid}")
+    out = [n for n in chosen if n not in cfg.exclude]
+    if not out:
+        raise ConfigError(f"no candidate effects left after exclude={cfg.exclude}; valid: {valid}")
+    return out
+
+
+def _impedance(model: FittedModel, sign: float) -> list[dict]:
+    """Per trial, the linear parameters with the torque sign folded in (positive I, B, K)."""
+    return [
+        {k: float(sign * v) for k, v in zip(model.linear_names, beta, strict=True)} for beta in model.beta
+    ]
+
+
+def _stage(model, trials, y_band, noise, floor, sign, frf_meas) -> dict:
+    gap, _, per_trial = held_out_gap(model, trials, y_band)
+    frf_sim = [frf_parameters(tr, p) for tr, p in zip(trials, model.predictions, strict=True)]
+    return {
+        "effects": list(model.effects),
+        "held_out_gap": gap,
+        "held_out_vaf_percent": 100.0 * (1.0 - gap),
+        "noise_floor": floor,
+        "per_trial": [
+            {"trial": tr.name, "held_out_gap": g, "held_out_vaf_percent": 100.0 * (1.0 - g)}
+            for tr, g in zip(trials, per_trial, strict=True)
+        ],
+        "bands": band_breakdown(trials, y_band, model.residuals, noise),
+        "windows": window_breakdown(trials, y_band, model.residuals, noise.variance_Nm2),
+        "parameters": _impedance(model, sign),
+        "nonlinear_parameters": dict(model.theta),
+        "frf_bias": [
+            {k: m[k] - s[k] for k in ("I", "B", "K")} | {"measured": m, "simulated": s}
+            for m, s in zip(frf_meas, frf_sim, strict=True)
+        ],
+        "n_params": model.n_params,
+    }
+
+
+def prepare_scoring(records, cfg: DiagnosisConfig, **kw):
+    """(prepared trials, scoring high-pass sections, measured torque in the scoring band).
+
+    ``kw``: further arguments of :func:`armlab.protocols.joint_1dof.diagnosis.data.prepare_trials`
+    (``edge_s``).
+    """
+    trials = prepare_trials(
+        records,
+        fs_fit_hz=cfg.fs_fit_hz,
+        band_hz=cfg.band_hz,
+        holdout_fraction=cfg.holdout_fraction,
+        slow_hz=cfg.slow_hz,
+        min_duration_s=cfg.min_duration_s,
+        **kw,
+    )
+    hp = highpass_sos(trials[0].fs_hz, cfg.highpass_hz)
+    return trials, hp, [signal.sosfiltfilt(hp, tr.y) for tr in trials]
+
+
+def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
+    trials, hp, y_band = prepare_scoring(records, cfg)
+    fs = trials[0].fs_hz
+    noise = noise_floor(records, trials, band_hz=cfg.band_hz, highpass_hz=cfg.highpass_hz)
+    n_h = sum(int(np.sum(tr.held)) for tr in trials)
+    tss = sum(float(np.sum(y[tr.held] ** 2)) for y, tr in zip(y_band, trials, strict=True))
+    floor = noise.variance_Nm2 * n_h / tss
+    names = candidate_names(cfg)
+    sel = select_effects(
+        trials,
+        y_band,
+        hp,
+        {n: JOINT_SURROGATES[n] for n in names},
+        floor,
+        cfg,
+        band_share=(cfg.band_hz - cfg.highpass_hz) / (0.5 * fs),
+        family=JOINT_FAMILY,
+    )
+    nominal = sel.stages[0]
+    k_total = sum(float(np.mean(b[2])) for b in nominal.beta)
+    sign = -1.0 if k_total < 0 else 1.0  # the impedance is -torque/position when antiphase
+    frf_meas = [frf_parameters(tr, y) for tr, y in zip(trials, y_band, strict=True)]  # once, for every stage
+    stages = [_stage(m, trials, y_band, noise, floor, sign, frf_meas) for m in sel.stages]
+    ranking = [{k: v for k, v in e.items() if k != "model"} for e in sel.rankings[0]] if sel.rankings else []
+    results = {
+        "verdict": sel.verdict,
+        "ranking": ranking,
+        "ranking_steps": [[{k: v for k, v in e.items() if k != "model"} for e in r] for r in sel.rankings],
+        "gap": {
+            "metric": "held-out residual power / measured power in the scoring band (1 - VAF)",
+            "nominal": stages[0]["held_out_gap"],
+            "added": [{"effects": s["effects"], "held_out_gap": s["held_out_gap"]} for s in stages[1:]],
+            "noise_floor": floor,
+            "noise_source": noise.source,
+        },
+        "where": {
+            "bands": stages[0]["bands"],
+            "windows": stages[0]["windows"],
+            "per_trial": stages[0]["per_trial"],
+            "channels": [{"channel": "torque", "axis": "joint", "held_out_gap": stages[0]["held_out_gap"]}],
+            "residual_tests": residual_tests(trials, nominal.residuals),
+            "parameter_bias": stages[0]["frf_bias"],
+        },
+        "how_far": stages,
+        "indistinct": sel.indistinct,
+        "partial": sel.partial,
+        "torque_sign": "antiphase (impedance = -torque/position)" if sign < 0 else "in phase",
+        "trials": [tr.name for tr in trials],
+    }
+    series = {
+        "trials": trials,
+        "measured": y_band,
+        "nominal": list(nominal.predictions),
+        "corrected": list(sel.stages[-1].predictions),
+        "stages": sel.stages,
+        "residual_tests_final": residual_tests(trials, sel.stages[-1].residuals),
+        "noise": noise,
+    }
+    return results, series
+
+
+def diagnose_joint(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
+    """Diagnose 1-DoF joint trials (pooled, or each trial on its own with ``cfg.per_trial``).
+
+    Args:
+        records: imported trials (``name``, ``position`` rad, ``torque`` N·m, ``fs_hz``).
+        cfg: the diagnosis settings.
+
+    Returns:
+        (results, series). In per-trial mode ``results`` has the pooled keys of the first trial's
+        diagnosis replaced by a ``"per_trial"`` list of every trial's results and a summary
+        ``verdict`` per trial; ``series`` is keyed by trial name.
+    """
+    records = list(records)
+    cfg = cfg.with_rules(RULES)
+    settings = asdict(cfg)
+    if not cfg.per_trial:
+        results, series = _diagnose_group(records, cfg)
+        results["protocol"] = "joint_1dof"
+        results["settings"] = settings
+        return results, {"all": series}
+    per, series = [], {}
+    for r in records:
+        res, ser = _diagnose_group([r], cfg)
+        res["trial"] = r.name
+        per.append(res)
+        series[r.name] = ser
+    summary = {
+        "protocol": "joint_1dof",
+        "settings": settings,
+        "verdict": {p["trial"]: p["verdict"] for p in per},
+        "ranking": {p["trial"]: p["ranking"] for p in per},
+        "gap": {p["trial"]: p["gap"] for p in per},
+        "per_trial": per,
+    }
+    return summary, series

@@ -1,0 +1,122 @@
+"""``armlab fit-joint``: impedance and admittance fits of real 1-DoF joint recordings (edge module).
+
+Reads CSV trials (one file, or every ``*.csv`` of a folder; format of :mod:`armlab.data.reklab`),
+runs :func:`armlab.protocols.joint_1dof.frf.fit_joint_frf` on each and writes, in a fresh run
+directory, ``results.json`` (``{"trials": {name: per-trial results}, "frf": settings}``; keys in
+docs/results_schema.md), ``table.txt`` (the printed table) and ``bode_impedance.png``.
+"""
+
+from __future__ import annotations
+
+from datetime import datetime
+from pathlib import Path
+
+from omegaconf import OmegaConf
+
+from armlab.config.schema import FrfConfig
+from armlab.config.store import apply_overrides
+from armlab.data.reklab import list_ankle_trials, load_ankle_trial
+from armlab.errors import ConfigError, DataError
+from armlab.protocols._files import write_json, write_new
+from armlab.protocols.joint_1dof.frf import JOINT_BAND_HZ, fit_joint_frf
+
+__all__ = [
+    "default_out_dir",
+    "fit_joint_recordings",
+    "format_joint_table",
+    "joint_frf_config",
+    "run_fit_joint",
+]
+
+
+def joint_frf_config(overrides: list[str] | None = None) -> FrfConfig:
+    """Frequency-response settings for joint data: the protocol's, with the joint band by default,
+    updated by ``frf.<field>=<value>`` overrides."""
+    return apply_overrides(FrfConfig(band_hz=JOINT_BAND_HZ), "frf", overrides)
+
+
+def _sources(source: Path) -> list[tuple[Path, str]]:
+    if source.is_dir():
+        names = list_ankle_trials(source)
+        if not names:
+            raise DataError(f"{source} holds no *.csv trials (columns t_s,position_rad,torque_Nm)")
+        return [(source, n) for n in names]
+    if source.is_file() and source.suffix.lower() == ".csv":
+        return [(source.parent, source.stem)]
+    raise DataError(f"{source} is neither a folder of CSV trials nor a .csv file")
+
+
+def fit_joint_recordings(source: Path | str, frf: FrfConfig, out_dir: Path | str, *, viz) -> dict:
+    """Fit every trial of ``source`` and write the outputs into the new directory ``out_dir``.
+
+    ``viz`` is :mod:`armlab.viz`, handed in by the edge (a protocol never imports it).
+    """
+    out_dir = Path(out_dir)
+    if out_dir.exists() and not out_dir.is_dir():
+        raise DataError(f"{out_dir} exists and is not a directory; give a new directory for the outputs")
+    if out_dir.exists() and any(out_dir.iterdir()):
+        raise DataError(f"{out_dir} is not empty; armlab never overwrites results — use a new directory")
+    trials, series = {}, {}
+    for root, name in _sources(Path(source)):
+        trial = load_ankle_trial(name, root)
+        res, ser = fit_joint_frf(trial.position, trial.torque, trial.fs_hz, frf, name)
+        res["time_varying"] = trial.operating_point is not None  # an LTI fit is only a summary there
+        res["source"] = str(trial.path)
+        trials[name], series[name] = res, ser
+    results = {
+        "protocol": "joint_frf",
+        "frf": OmegaConf.to_container(OmegaConf.structured(frf)),
+        "trials": trials,
+    }
+    out_dir.mkdir(parents=True, exist_ok=True)
+    results["files"] = {"bode": str(viz.plot_joint_bode(series, out_dir / "bode_impedance.png"))}
+    write_new(out_dir / "table.txt", format_joint_table(results) + "\n")
+    write_json(out_dir / "results.json", results)
+    return results
+
+
+def format_joint_table(results: dict) -> str:
+    """One line per trial: integer and fractional impedance, best admittance models."""
+    lines = [
+        "trial    coh  | I s²+B s+K: I [kg m²]  B      K     R²    "
+        "| I s²+B s^a+K: a    I       B      K     R²    "
+        "| admittance: best integer (R²), best fractional (alpha, R²)"
+    ]
+    for name, r in results["trials"].items():
+        i, fr = r["impedance"]["integer"], r["impedance"]["fractional"]
+        ad = r["admittance"]
+        bi, bf = ad["best_integer"], ad["best_fractional"]
+        best_int = f"{bi} ({ad['models'][bi]['r2']:.3f})" if bi else "-"
+        best_frac = f"{bf} ({ad['models'][bf]['alpha']:.1f}, {ad['models'][bf]['r2']:.3f})" if bf else "-"
+        lines.append(
+            f"{name:8s} {r['mean_coherence']:.2f} | "
+            f"{i['I']:18.4f} {i['B']:6.2f} {i['K']:6.0f} {i['r2']:6.3f} | "
+            f"{fr['alpha']:14.1f} {fr['I']:7.4f} {fr['B']:6.2f} {fr['K']:6.0f} {fr['r2']:6.3f} | "
+            f"{best_int}, {best_frac}{'  (time-varying: LTI summary)' if r.get('time_varying') else ''}"
+        )
+    lo, hi = results["frf"]["band_hz"]
+    lines.append(
+        f"band {lo:g}-{hi:g} Hz, Welch {results['frf']['welch_window']} samples; R² on magnitudes (Eq. 26)"
+    )
+    return "\n".join(lines)
+
+
+def default_out_dir() -> Path:
+    return Path("outputs") / "joint_frf" / f"{datetime.now():%Y-%m-%d_%H-%M-%S-%f}"
+
+
+def run_fit_joint(args: list[str], viz) -> int:
+    """``armlab fit-joint <csv|folder> [frf.<field>=<value>] [out=<dir>]``."""
+    if not args or "=" in args[0]:
+        raise ConfigError("fit-joint needs a CSV file or folder: armlab fit-joint <csv|folder> [frf.<f>=<v>]")
+    out = default_out_dir()
+    rest = []
+    for item in args[1:]:
+        if item.startswith("out="):
+            out = Path(item.partition("=")[2])
+        else:
+            rest.append(item)
+    results = fit_joint_recordings(Path(args[0]), joint_frf_config(rest), out, viz=viz)
+    print(format_joint_table(results))
+    print(f"outputs: {out}")
+    return 0

@@ -1,0 +1,120 @@
+"""The edge of ``armlab diagnose`` and ``armlab diagnose-benchmark``: files in, files out.
+
+``run_diagnosis`` reads measured trials, runs the protocol's diagnosis hooks (from the registry) and
+writes ``results.json``, ``report.md``, the figures and ``diagnosis.rrd`` into a new folder.
+``run_benchmark`` makes the referee's pseudo-real datasets, diagnoses each from its files alone
+(in parallel through joblib, the launcher Hydra's joblib plugin also uses) and writes the scores.
+Nothing already written is overwritten: an existing non-empty output folder is an error.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import replace
+from datetime import datetime
+from pathlib import Path
+
+import numpy as np
+
+from armlab.config.diagnosis import DiagnosisConfig, RefereeConfig
+from armlab.config.store import apply_overrides
+from armlab.errors import ConfigError, DataError
+from armlab.protocols import registry
+from armlab.protocols._files import new_dir, write_json, write_new
+
+__all__ = [
+    "default_diagnosis_dir",
+    "run_benchmark",
+    "run_diagnosis",
+    "run_diagnoser",
+]
+
+_ROOT = Path(__file__).resolve().parents[2]
+
+
+def default_diagnosis_dir(kind: str = "diagnose") -> Path:
+    """``outputs/<kind>/<timestamp with microseconds>`` under the repository root."""
+    return _ROOT / "outputs" / kind / datetime.now().strftime("%Y-%m-%d_%H-%M-%S-%f")
+
+
+def run_diagnoser(data: Path, protocol: str, cfg: DiagnosisConfig) -> tuple[dict, dict]:
+    """Diagnose the trial files at ``data`` with a protocol's hooks (no output files): (results, series)."""
+    hooks = registry.get(protocol, need="diagnose").diagnosis
+    results, series = hooks.diagnose(hooks.load(Path(data), cfg), cfg)
+    results["data"] = str(data)
+    return results, series
+
+
+def run_diagnosis(
+    data: Path, protocol: str, overrides: list[str] | None, out_dir: Path, *, figures: bool = True
+) -> tuple[Path, dict]:
+    """Diagnose and write ``results.json``, ``report.md``, figures and ``diagnosis.rrd``."""
+    hooks = registry.get(protocol, need="diagnose").diagnosis
+    cfg = apply_overrides(DiagnosisConfig(), "diagnosis", overrides)
+    if not Path(data).exists():
+        raise DataError(f"data {str(data)!r} does not exist; give a trial file or a folder of them")
+    t0 = time.perf_counter()
+    results, series = run_diagnoser(Path(data), protocol, cfg)
+    results["timing_s"] = {"diagnosis": time.perf_counter() - t0}
+    out = new_dir(out_dir)
+    names: list[str] = []
+    if figures:
+        from armlab import viz  # figures and recordings at the edge only
+
+        names = [p.name for p in hooks.figures(viz, series, results, out)]
+        hooks.recording(viz, series, out / "diagnosis.rrd")
+    write_json(out / "results.json", results)
+    write_new(out / "report.md", hooks.report(results, data_path=str(data), figures=names))
+    return out, results
+
+
+def _one_case(cls: str, rep: int, ref: RefereeConfig, diag_cfg: DiagnosisConfig, root: Path) -> dict:
+    from armlab.diagnosis.scoring import expected_verdict, score_case
+
+    referee = registry.get(ref.protocol, need="referee").diagnosis.referee
+    folder = root / "datasets" / f"{cls.replace(':', '-').replace('+', '-')}_{rep:02d}"
+    ds = referee.make_dataset(cls, rep, ref, diag_cfg, folder / "trials")
+    write_json(folder / "truth.json", ds.truth)
+    excluded = list(referee.classes[cls][1])
+    cfg = apply_overrides(diag_cfg, "diagnosis", [f"diagnosis.exclude=[{','.join(excluded)}]"])
+    t0 = time.perf_counter()
+    results, _ = run_diagnoser(folder / "trials", ref.protocol, cfg)
+    seconds = time.perf_counter() - t0
+    write_json(folder / "results.json", results)
+    score = score_case(cls, results, expected_verdict(cls, referee.classes))
+    return {**score, "replicate": rep, "enr": ds.enr, "seconds": seconds, "truth": ds.truth}
+
+
+def run_benchmark(overrides: list[str] | None, out_dir: Path) -> tuple[Path, dict]:
+    """Run the referee: make, diagnose and score every (class, replicate); write the summary."""
+    from joblib import Parallel, delayed
+
+    from armlab.diagnosis.benchmark_summary import format_benchmark, summarise
+
+    ref_items = [o for o in overrides or [] if o.startswith("referee.")]
+    diag_items = [o for o in overrides or [] if o.startswith("diagnosis.")]
+    bad = [o for o in overrides or [] if o not in ref_items + diag_items]
+    if bad:
+        raise ConfigError(
+            f"arguments {bad} must look like referee.<field>=<value> or diagnosis.<field>=<value>"
+        )
+    ref = apply_overrides(RefereeConfig(), "referee", ref_items)
+    if ref.protocol is None:
+        ref = replace(ref, protocol=registry.DEFAULT_REFEREE)
+    diag_cfg = apply_overrides(DiagnosisConfig(), "diagnosis", diag_items)
+    all_classes = registry.get(ref.protocol, need="referee").diagnosis.referee.classes
+    classes = list(ref.classes) if ref.classes is not None else list(all_classes)
+    unknown = [c for c in classes if c not in all_classes]
+    if unknown:
+        raise ConfigError(f"unknown referee classes {unknown} for {ref.protocol}; valid: {list(all_classes)}")
+    out = new_dir(out_dir)
+    t0 = time.perf_counter()
+    cases = Parallel(n_jobs=ref.jobs)(
+        delayed(_one_case)(c, r, ref, diag_cfg, out) for c in classes for r in range(ref.replicates)
+    )
+    summary = summarise(cases)
+    summary["timing_s"] = time.perf_counter() - t0
+    summary["median_diagnosis_s"] = float(np.median([c["seconds"] for c in cases]))
+    write_json(out / "benchmark.json", {"summary": summary, "cases": cases})
+    write_new(out / "benchmark.md", format_benchmark(summary, ref))
+    return out, summary

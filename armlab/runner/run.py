@@ -1,0 +1,149 @@
+"""Run a protocol end to end and write its outputs — the edge where files and figures happen.
+
+Outputs in the run directory (never overwritten: a directory that already holds results is
+refused): ``results.json`` (docs/results_schema.md), ``trials.h5`` (docs/trial_format.md),
+``scene.xml`` (the composed MJCF), and what the protocol's ``outputs`` hook writes (its figures,
+tables and ``trials.rrd``, the rerun recording of every trial). The protocol comes from the
+registry; nothing here names one.
+"""
+
+from __future__ import annotations
+
+import time
+from datetime import datetime
+from pathlib import Path
+
+from omegaconf import OmegaConf
+
+from armlab.config.effects import enabled_effects
+from armlab.config.schema import ExperimentConfig
+from armlab.data.h5io import read_trials, write_trials
+from armlab.data.trial import TrialSet
+from armlab.errors import ConfigError, DataError
+from armlab.protocols import registry
+from armlab.protocols._files import write_json, write_new
+from armlab.protocols.base import OutputContext
+
+__all__ = [
+    "format_table",
+    "reestimate",
+    "run_protocol",
+]
+
+
+def _save_trials(path: Path, trials: TrialSet, extra_attrs: dict) -> None:
+    """Write the trial file; drawing aids (body points) stay out of it."""
+    saved = {k: v for k, v in trials.channels.items() if not k.endswith("_points")}
+    write_trials(
+        path,
+        TrialSet(
+            fs_hz=trials.fs_hz,
+            onset_index=trials.onset_index,
+            channels=saved,
+            units={k: trials.units[k] for k in saved},
+            trial_meta=trials.trial_meta,
+            attrs={**trials.attrs, **extra_attrs},
+        ),
+    )
+
+
+def _run(cfg: ExperimentConfig, out_dir: Path, config_yaml: str, timing: dict) -> dict:
+    from armlab import viz  # the only place figures and recordings are made
+
+    protocol = registry.get(cfg.protocol_name, need="run")
+    on = [n for n in enabled_effects(cfg.effects) if n not in protocol.effects]
+    if on:  # never silently ignore a switched-on effect
+        simulating = [p.name for p in registry.protocols() if set(on) <= set(p.effects)]
+        raise ConfigError(
+            f"effects {on} are not simulated by protocol {protocol.name!r} yet; it applies "
+            f"{list(protocol.effects)}"
+            + (f"; protocols that simulate them: {simulating}" if simulating else "")
+            + "; the referees of `armlab diagnose-benchmark` simulate the diagnosis candidates"
+        )
+    t0 = time.perf_counter()
+    sim = protocol.simulate(cfg)
+    timing["simulate_s"] = time.perf_counter() - t0
+    t1 = time.perf_counter()
+    results, series = sim.estimate()
+    timing["estimate_s"] = time.perf_counter() - t1
+    trials = sim.trials
+    results["simulated_s"] = trials.n_trials * trials.n_samples / trials.fs_hz
+    t2 = time.perf_counter()
+    if cfg.output.trials:
+        _save_trials(out_dir / "trials.h5", trials, {"config_yaml": config_yaml, **sim.attrs})
+    write_new(out_dir / "scene.xml", sim.scene_xml)
+    ctx = OutputContext(viz=viz, out_dir=out_dir, trials=trials, results=results, series=series, cfg=cfg)
+    written = protocol.outputs(ctx) if protocol.outputs is not None else {}
+    results["files"] = {k: str(v) for k, v in written.items()}
+    timing["outputs_s"] = time.perf_counter() - t2
+    return results
+
+
+def run_protocol(cfg: ExperimentConfig, out_dir: Path, config_yaml: str = "") -> dict:
+    """Simulate, estimate and write every output of one protocol run.
+
+    Args:
+        cfg: the validated experiment configuration (an instance of the protocol's schema).
+        out_dir: the run directory (Hydra's); must not already contain results.
+        config_yaml: the composed config, stored with the trials for re-estimation.
+
+    Returns:
+        The results dict (also written to ``results.json``).
+    """
+    registry.get(cfg.protocol_name, need="run")
+    out_dir = Path(out_dir)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    if (out_dir / "results.json").exists():
+        raise DataError(f"{out_dir} already holds results.json; armlab never overwrites a run")
+    timing: dict = {}
+    t0 = time.perf_counter()
+    results = _run(cfg, out_dir, config_yaml, timing)
+    timing["total_s"] = time.perf_counter() - t0
+    results["timing"] = timing
+    write_json(out_dir / "results.json", results)
+    return results
+
+
+def reestimate(run_dir: Path, overrides: list[str] | None = None) -> tuple[Path, dict]:
+    """Re-run the estimation on a run's saved ``trials.h5`` without simulating again.
+
+    The settings come from the run's stored config, updated by overrides of the protocol's
+    re-estimation group (``<group>.<field>=<value>``; the group is the protocol's
+    ``reestimate_group``). Results go to a new ``reestimate_<timestamp>/`` directory inside the run
+    directory.
+    """
+    run_dir = Path(run_dir)
+    path = run_dir / "trials.h5"
+    if not path.is_file():
+        raise DataError(f"{run_dir} has no trials.h5; give a run directory made by `armlab run`")
+    trials = read_trials(path)
+    stored = OmegaConf.create(trials.attrs.get("config_yaml") or "{}")
+    name = str(trials.attrs.get("protocol", registry.DEFAULT_PROTOCOL))
+    try:
+        protocol = registry.get(name, need="estimate")
+    except ConfigError as exc:
+        raise DataError(f"{path} holds trials of protocol {name!r}: {exc}") from None
+    results = protocol.reestimate(trials, stored, list(overrides or []))
+    out = run_dir / f"reestimate_{datetime.now():%Y-%m-%d_%H-%M-%S-%f}"
+    out.mkdir()
+    write_json(out / "results.json", results)
+    return out, results
+
+
+def format_table(results: dict) -> str:
+    """The run's results as text (printed at the end of ``armlab run`` and ``armlab estimate``)."""
+    from armlab import viz
+
+    name = results.get("protocol", registry.DEFAULT_PROTOCOL)
+    return registry.get(name, need="run").format_table(results, viz) + _timing_line(results)
+
+
+def _timing_line(results: dict) -> str:
+    if "timing" not in results:
+        return ""
+    t = results["timing"]
+    return (
+        f"\nsimulated {results['simulated_s']:.0f} s in {t['simulate_s']:.1f} s "
+        f"({results['simulated_s'] / t['simulate_s']:.0f}x real time); estimation {t['estimate_s']:.2f} s; "
+        f"outputs {t['outputs_s']:.1f} s; total {t['total_s']:.1f} s"
+    )
