@@ -31,7 +31,7 @@ from typing import Literal
 import numpy as np
 
 from armlab.errors import ConfigError, EstimationError
-from armlab.estimation.arm_tf_models import CommensurateTF, check_alpha, s_power
+from armlab.models.tf_structures import CommensurateTF, check_alpha, s_power
 
 __all__ = [
     "PAPER_STRUCTURES",
