@@ -143,12 +143,15 @@ def test_checker_reports_upward_imports_circles_and_unplaced_modules():
         "pkg.high": "import pkg.low\n",
         "pkg.side": "from . import low\n",
         "pkg.stray": "",
+        "pkg.sub": "from pkg.sub.a import x\n",
+        "pkg.sub.a": "from pkg.sub import y\n",  # back through its package's __init__
     }
-    layers = {"pkg": 0, "pkg.low": 0, "pkg.side": 0, "pkg.high": 1}
-    assert violations(sources, {"pkg"}, layers) == [
+    layers = {"pkg": 0, "pkg.low": 0, "pkg.side": 0, "pkg.sub": 0, "pkg.high": 1}
+    assert violations(sources, {"pkg", "pkg.sub"}, layers) == [
         "pkg.stray is in no layer",
         "pkg.low -> pkg.high (level 0 -> level 1)",
         "circle among pkg.high, pkg.low: pkg.high -> pkg.low; pkg.low -> pkg.high",
+        "circle among pkg.sub, pkg.sub.a: pkg.sub -> pkg.sub.a; pkg.sub.a -> pkg.sub",
     ]
 
 
