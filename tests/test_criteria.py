@@ -133,7 +133,6 @@ def test_public_api_resolves():
     import importlib
 
     import armlab.estimation as est
-    import armlab.estimation.arm_tf_models as tfm
     import armlab.estimation.criteria as crit
     import armlab.estimation.five_element_fit as ffit
     import armlab.estimation.frf as frf
@@ -146,7 +145,7 @@ def test_public_api_resolves():
     sig = importlib.import_module("armlab.estimation.capstan_signals")
     vf = importlib.import_module("armlab.estimation.virtual_force")
 
-    modules = (crit, ls, proc, frf, levy, tfm, ffit, sig, sm, vf)
+    modules = (crit, ls, proc, frf, levy, ffit, sig, sm, vf)
     for module in (est, *modules):
         assert all(hasattr(module, name) for name in module.__all__), module.__name__
     # smoothing.differentiate is exported as sg_differentiate (processing.differentiate keeps the name)

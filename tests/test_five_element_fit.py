@@ -6,7 +6,6 @@ import numpy as np
 import pytest
 
 from armlab.errors import ConfigError, EstimationError
-from armlab.estimation.arm_tf_models import FiveElement
 from armlab.estimation.five_element_fit import (
     best_five_element,
     five_element_guesses,
@@ -14,6 +13,7 @@ from armlab.estimation.five_element_fit import (
     fractional_five_element_sweep,
     refine_five_element,
 )
+from armlab.models.tf_structures import FiveElement
 
 F = np.linspace(0.12, 15.0, 134)  # Hz, the protocol's band and number of Welch points
 # translational values at L = 0.35 m of the default elbow (I 0.0735 kg m², K 60, c 8, grasp 2000/10)

@@ -7,8 +7,8 @@ import pytest
 from numpy.testing import assert_allclose
 
 from armlab.errors import ConfigError, EstimationError
-from armlab.estimation.arm_tf_models import IDENTIFIED_MODELS, CommensurateTF
 from armlab.estimation.levy import PAPER_STRUCTURES, LevyStructure, fit_indices, levy_fit, levy_sweep
+from armlab.models.tf_structures import IDENTIFIED_MODELS, CommensurateTF
 
 # The paper's grid: Welch with nfft = 18000 at 2 kHz (0.111 Hz spacing) on 0.12-15 Hz: 134 points.
 F_PAPER = np.arange(1001) * 2000.0 / 18000.0

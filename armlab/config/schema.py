@@ -10,6 +10,8 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
+import numpy as np
+
 from armlab.config.capstan import CapstanConfig, VfsConfig
 from armlab.config.effects import EffectsConfig
 from armlab.errors import ConfigError
@@ -31,6 +33,7 @@ __all__ = [
     "SensorsConfig",
     "SimConfig",
     "VfsConfig",
+    "alpha_grid",
 ]
 
 MUSCLE_VARIANTS = ("hill", "linear")
@@ -324,6 +327,14 @@ class DirectDriveConfig:
         )
 
 
+def alpha_grid(step: float = 0.1) -> np.ndarray:
+    """The orders ``step, 2 step, ...`` below 2 (Sec. IV-A's grid); ``step`` must divide 1."""
+    n_unit = round(1.0 / step) if 0 < step < 1 else 0
+    if n_unit < 2 or abs(n_unit * step - 1.0) > 1e-9:
+        raise ConfigError(f"the alpha step must divide 1 (e.g. 0.1, 0.05, 0.25, 0.5), got {step}")
+    return np.round(np.arange(1, 2 * n_unit) / n_unit, 12)
+
+
 @dataclass(kw_only=True)
 class FrfConfig:
     """Frequency-response estimation and Levy fits (fractional-elbow paper, Sec. II and III-B)."""
@@ -351,8 +362,6 @@ class FrfConfig:
         _check(0 <= self.welch_overlap < 1, f"frf.welch_overlap must lie in [0, 1), got {self.welch_overlap}")
         lo, hi = self.band_hz
         _check(0 <= lo < hi, f"frf.band_hz must be (low, high) with 0 <= low < high, got {(lo, hi)}")
-        from armlab.estimation.levy import alpha_grid  # the one grid rule (local: config stays light)
-
         try:
             alpha_grid(self.alpha_step)
         except ConfigError:

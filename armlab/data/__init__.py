@@ -10,10 +10,10 @@ from armlab.data.joint_import import (
     JOINT_COLUMNS,
     SUPPORTED_SUFFIXES,
     TIME_VARYING_COLUMNS,
-    JointRecord,
     load_joint_data,
     write_joint_csv,
 )
+from armlab.data.joint_record import JointRecord
 from armlab.data.reklab import (
     DEFAULT_REKLAB_ROOT,
     AnkleTrial,

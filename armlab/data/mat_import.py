@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from armlab.data.joint_import import _RATE_RTOL, JointRecord, _check_samples
+from armlab.data.joint_record import _RATE_RTOL, JointRecord, _check_samples
 from armlab.errors import DataError
 
 __all__ = ["read_mat"]

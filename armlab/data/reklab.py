@@ -17,7 +17,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from armlab.data.joint_import import JointRecord, load_joint_data
+from armlab.data.joint_import import load_joint_data
+from armlab.data.joint_record import JointRecord
 from armlab.errors import DataError
 
 __all__ = [

@@ -1,18 +1,5 @@
 """Estimation of arm impedance from processed trial data."""
 
-from armlab.estimation.arm_tf_models import (
-    IDENTIFIED_MODELS,
-    LITERATURE_MODELS,
-    PUBLISHED_BANDWIDTH_HZ,
-    CommensurateTF,
-    FiveElement,
-    FiveElementFit,
-    bandwidth_hz,
-    check_alpha,
-    five_element_from_tf,
-    s_power,
-    third_order_tf,
-)
 from armlab.estimation.capstan_signals import CapstanSignals, capstan_signals, rotate_by
 from armlab.estimation.criteria import (
     CriteriaConfig,
@@ -97,7 +84,6 @@ __all__ = [
     "five_element_guesses",
     "best_five_element",
     "FractionalFiveElementSweep",
-    "bandwidth_hz",
     "FirLowpass",
     "FirLowpassSpec",
     "FrequencyResponse",
@@ -112,16 +98,6 @@ __all__ = [
     "fit_indices",
     "levy_fit",
     "levy_sweep",
-    "IDENTIFIED_MODELS",
-    "LITERATURE_MODELS",
-    "PUBLISHED_BANDWIDTH_HZ",
-    "CommensurateTF",
-    "FiveElement",
-    "FiveElementFit",
-    "check_alpha",
-    "five_element_from_tf",
-    "s_power",
-    "third_order_tf",
     "CriteriaConfig",
     "asymmetry",
     "condition_number",

@@ -24,8 +24,8 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from armlab.errors import ConfigError, EstimationError
-from armlab.estimation.arm_tf_models import FiveElement, check_alpha
 from armlab.estimation.levy import FitIndices, alpha_grid, fit_indices
+from armlab.models.tf_structures import FiveElement, check_alpha
 
 __all__ = [
     "FractionalFiveElementSweep",

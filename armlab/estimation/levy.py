@@ -30,8 +30,9 @@ from typing import Literal
 
 import numpy as np
 
+from armlab.config.schema import alpha_grid  # the one grid rule, with FrfConfig that checks by it
 from armlab.errors import ConfigError, EstimationError
-from armlab.estimation.arm_tf_models import CommensurateTF, check_alpha, s_power
+from armlab.models.tf_structures import CommensurateTF, check_alpha, s_power
 
 __all__ = [
     "PAPER_STRUCTURES",
@@ -307,14 +308,6 @@ def levy_fit(
         indices=fit_indices(G, model.response(f), on=indices_on),
         n_freq=int(f.size),
     )
-
-
-def alpha_grid(step: float = 0.1) -> np.ndarray:
-    """The orders ``step, 2 step, ...`` below 2 (Sec. IV-A's grid); ``step`` must divide 1."""
-    n_unit = round(1.0 / step) if 0 < step < 1 else 0
-    if n_unit < 2 or abs(n_unit * step - 1.0) > 1e-9:
-        raise ConfigError(f"the alpha step must divide 1 (e.g. 0.1, 0.05, 0.25, 0.5), got {step}")
-    return np.round(np.arange(1, 2 * n_unit) / n_unit, 12)
 
 
 def levy_sweep(

@@ -17,6 +17,7 @@ from armlab.models.joint_1dof_scene import (
     JointSubject,
     build_joint_1dof_scene,
 )
+from armlab.models.oustaloup import FractionalElement, oustaloup_zpk
 from armlab.models.robot_fk import (
     RobotKinematics,
 )
@@ -37,6 +38,19 @@ from armlab.models.spring_array import (
     design_spring_array,
     fixture_mjcf,
     table_i_array,
+)
+from armlab.models.tf_structures import (
+    IDENTIFIED_MODELS,
+    LITERATURE_MODELS,
+    PUBLISHED_BANDWIDTH_HZ,
+    CommensurateTF,
+    FiveElement,
+    FiveElementFit,
+    bandwidth_hz,
+    check_alpha,
+    five_element_from_tf,
+    s_power,
+    third_order_tf,
 )
 
 __all__ = [
@@ -77,4 +91,17 @@ __all__ = [
     "LOADS",
     "CapstanScene",
     "build_capstan_scene",
+    "FractionalElement",
+    "oustaloup_zpk",
+    "IDENTIFIED_MODELS",
+    "LITERATURE_MODELS",
+    "PUBLISHED_BANDWIDTH_HZ",
+    "CommensurateTF",
+    "FiveElement",
+    "FiveElementFit",
+    "bandwidth_hz",
+    "check_alpha",
+    "five_element_from_tf",
+    "s_power",
+    "third_order_tf",
 ]

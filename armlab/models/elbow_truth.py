@@ -22,9 +22,9 @@ import mujoco
 import numpy as np
 
 from armlab.config.schema import ElbowConfig
-from armlab.estimation.arm_tf_models import FiveElement
 from armlab.models.direct_drive_scene import DirectDriveScene
-from armlab.sim.fractional import FractionalElement
+from armlab.models.oustaloup import FractionalElement
+from armlab.models.tf_structures import FiveElement
 
 __all__ = [
     "ElbowTruth",

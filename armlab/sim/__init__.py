@@ -2,7 +2,6 @@
 
 from armlab.sim.capstan_lab import CLEAN_UNITS, simulate_capstan
 from armlab.sim.force_control import ForceTrial, simulate_force_trial
-from armlab.sim.fractional import FractionalElement, oustaloup_zpk
 from armlab.sim.hold import (
     HoldState,
     preload_activations,
@@ -23,8 +22,6 @@ from armlab.sim.rollout import (
 )
 
 __all__ = [
-    "oustaloup_zpk",
-    "FractionalElement",
     "simulate_force_trial",
     "ForceTrial",
     "HoldState",

@@ -25,8 +25,8 @@ import numpy as np
 from armlab.config.schema import DirectDriveConfig, ElbowConfig, ReflexConfig
 from armlab.errors import ConfigError, SimulationError
 from armlab.models.direct_drive_scene import DirectDriveScene
+from armlab.models.oustaloup import FractionalElement
 from armlab.sensors.channel import ChannelSpec
-from armlab.sim.fractional import FractionalElement
 from armlab.sim.rollout import reflex_command
 
 __all__ = [

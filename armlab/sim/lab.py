@@ -2,7 +2,8 @@
 
 config -> scene -> settled hold -> robot joint targets for every trial -> batched rollout ->
 sensor models -> the measurement processing a real lab does on its robot (hand position from the
-encoders by forward kinematics, the F/T reading rotated into the shoulder frame) -> TrialSet.
+encoders by forward kinematics, the F/T reading rotated into the shoulder frame) -> channel arrays
+(:class:`LabRecording`; the protocol assembles them into a TrialSet).
 """
 
 from __future__ import annotations
@@ -14,11 +15,10 @@ from scipy.interpolate import CubicSpline
 
 from armlab.config.effects import EffectsConfig, enabled_effects
 from armlab.config.schema import ExperimentConfig
-from armlab.data.trial import TrialSet
 from armlab.errors import ConfigError
 from armlab.models.ground_truth import GroundTruth, ground_truth
 from armlab.models.robot_fk import RobotKinematics
-from armlab.models.scene import MUSCLES, ROBOT_POINTS, Scene, build_scene
+from armlab.models.scene import ROBOT_POINTS, Scene, build_scene
 from armlab.perturbations.quintic import quintic_profile
 from armlab.perturbations.scenario import Scenario, TrialPlan
 from armlab.sensors.channel import ChannelSpec, apply_channel
@@ -67,16 +67,24 @@ def _force_effects(z: np.ndarray, effects: EffectsConfig, fs: float) -> np.ndarr
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class LabRecording:
-    """What a simulated session produced.
+    """What a simulated session produced, as arrays.
 
     Attributes:
-        trials: the recorded trials (measured channels + ``true_*`` channels).
+        fs_hz: Hz, sample rate of every channel.
+        onset_index: (n_trials,) sample index of each trial's perturbation onset.
+        channels: name -> (n_trials, n_samples, n_axes), the measured channels (``hand_pos``,
+            ``hand_force``, ``robot_q``, ``robot_tau``, ``ft_force``, ``ft_torque``) and the
+            noiseless ``true_*`` ones; names and axes as in :mod:`armlab.data.trial`.
+        units: name -> unit of each channel.
         truth: ground truth at the operating point.
         scene: the compiled scene (its MJCF is saved with the run).
         hold: the settled pre-perturbation state.
     """
 
-    trials: TrialSet
+    fs_hz: float
+    onset_index: np.ndarray
+    channels: dict[str, np.ndarray]
+    units: dict[str, str]
     truth: GroundTruth
     scene: Scene
     hold: HoldState
@@ -193,25 +201,12 @@ def record_trials(
         "true_arm_points": "m",
         "true_robot_points": "m",
     }
-    trials = TrialSet(
+    return LabRecording(
         fs_hz=fs,
         onset_index=np.full(plan.n_trials, onset),
         channels=channels,
         units=units,
-        trial_meta={
-            "group": plan.group,
-            "direction": plan.direction,
-            "T_k_s": plan.t_k_s,
-            "wait_s": plan.wait_s,
-            "validate": plan.validate,
-        },
-        attrs={
-            "protocol": cfg.protocol_name,
-            "seed": cfg.seed,
-            "arm_l1_m": scene.l1,
-            "arm_l2_m": scene.l2,
-            "muscles": list(MUSCLES),
-            "ground_truth": truth.as_dict(),
-        },
+        truth=truth,
+        scene=scene,
+        hold=hold,
     )
-    return LabRecording(trials=trials, truth=truth, scene=scene, hold=hold)

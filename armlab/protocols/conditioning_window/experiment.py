@@ -20,10 +20,14 @@ from armlab.errors import ConfigError, DataError
 from armlab.estimation import criteria
 from armlab.estimation.joint_ls import LSEstimate, estimate_windows, validate
 from armlab.estimation.processing import JointSignals, ProcessingConfig, joint_signals
+from armlab.models.ground_truth import GroundTruth
+from armlab.models.scene import MUSCLES, Scene
 from armlab.perturbations.scenario import Scenario, draw_trials, load_scenario
-from armlab.sim.lab import LabRecording, record_trials
+from armlab.sim.hold import HoldState
+from armlab.sim.lab import record_trials
 
 __all__ = [
+    "ConditioningRecording",
     "PAPER_THRESHOLDS_S",
     "PAPER_XI",
     "WindowSpec",
@@ -74,12 +78,52 @@ def window_specs(scenario: Scenario, estimator: EstimatorConfig) -> list[WindowS
     return specs
 
 
-def simulate_protocol(cfg: ExperimentConfig) -> tuple[LabRecording, Scenario]:
+@dataclass(frozen=True, kw_only=True, eq=False)
+class ConditioningRecording:
+    """What :func:`simulate_protocol` returns.
+
+    Attributes:
+        trials: the recorded trials (measured channels + ``true_*`` channels); ``trial_meta``
+            holds the plan (``group``, ``direction``, ``T_k_s``, ``wait_s``, ``validate``).
+        truth: ground truth at the operating point.
+        scene: the compiled scene (its MJCF is saved with the run).
+        hold: the settled pre-perturbation state.
+    """
+
+    trials: TrialSet
+    truth: GroundTruth
+    scene: Scene
+    hold: HoldState
+
+
+def simulate_protocol(cfg: ExperimentConfig) -> tuple[ConditioningRecording, Scenario]:
     """Draw the seeded trial plan and record every trial in the simulated lab."""
     scenario = load_scenario(cfg.scenario.name).subset(cfg.scenario.k_values, cfg.scenario.n_trials)
     plan_rng, sensor_rng = np.random.default_rng(cfg.seed).spawn(2)
     plan = draw_trials(scenario, plan_rng)
-    return record_trials(cfg, scenario, plan, sensor_rng), scenario
+    rec = record_trials(cfg, scenario, plan, sensor_rng)
+    trials = TrialSet(
+        fs_hz=rec.fs_hz,
+        onset_index=rec.onset_index,
+        channels=rec.channels,
+        units=rec.units,
+        trial_meta={
+            "group": plan.group,
+            "direction": plan.direction,
+            "T_k_s": plan.t_k_s,
+            "wait_s": plan.wait_s,
+            "validate": plan.validate,
+        },
+        attrs={
+            "protocol": cfg.protocol_name,
+            "seed": cfg.seed,
+            "arm_l1_m": rec.scene.l1,
+            "arm_l2_m": rec.scene.l2,
+            "muscles": list(MUSCLES),
+            "ground_truth": rec.truth.as_dict(),
+        },
+    )
+    return ConditioningRecording(trials=trials, truth=rec.truth, scene=rec.scene, hold=rec.hold), scenario
 
 
 def _check_windows(trials: TrialSet, specs: list[WindowSpec]) -> np.ndarray:

@@ -21,13 +21,6 @@ import numpy as np
 from armlab.config.schema import ExperimentConfig, FrfConfig
 from armlab.data.trial import TrialSet
 from armlab.errors import ConfigError, DataError, EstimationError
-from armlab.estimation.arm_tf_models import (
-    LITERATURE_MODELS,
-    CommensurateTF,
-    FiveElement,
-    bandwidth_hz,
-    five_element_from_tf,
-)
 from armlab.estimation.criteria import relative_error
 from armlab.estimation.five_element_fit import (
     best_five_element,
@@ -39,6 +32,13 @@ from armlab.estimation.frf import FirLowpassSpec, average_responses, design_fir_
 from armlab.estimation.levy import PAPER_STRUCTURES, LevyFit, alpha_grid, levy_fit, levy_sweep
 from armlab.models.direct_drive_scene import DirectDriveScene, build_direct_drive_scene
 from armlab.models.elbow_truth import ElbowTruth, elbow_truth
+from armlab.models.tf_structures import (
+    LITERATURE_MODELS,
+    CommensurateTF,
+    FiveElement,
+    bandwidth_hz,
+    five_element_from_tf,
+)
 from armlab.perturbations.multisine import ForceScenario, load_force_scenario, multisine
 from armlab.sensors.channel import ChannelSpec
 from armlab.sensors.presets import DD_ENCODER, JR3_FORCE

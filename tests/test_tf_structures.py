@@ -7,7 +7,8 @@ import pytest
 from numpy.testing import assert_allclose
 
 from armlab.errors import ConfigError, EstimationError
-from armlab.estimation.arm_tf_models import (
+from armlab.estimation.levy import LevyStructure, levy_fit
+from armlab.models.tf_structures import (
     IDENTIFIED_MODELS,
     LITERATURE_MODELS,
     PUBLISHED_BANDWIDTH_HZ,
@@ -16,7 +17,6 @@ from armlab.estimation.arm_tf_models import (
     five_element_from_tf,
     third_order_tf,
 )
-from armlab.estimation.levy import LevyStructure, levy_fit
 
 F_BAND = np.linspace(0.12, 15.0, 150)  # Hz, the paper's identification band
 # An arm like Fu's (Table II row 4, read by five_element_from_tf): kg, N/m, N/m, N·s/m, N·s/m.

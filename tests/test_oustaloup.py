@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from armlab.errors import ConfigError
-from armlab.sim.fractional import FractionalElement, oustaloup_zpk
+from armlab.models.oustaloup import FractionalElement, oustaloup_zpk
 
 
 @pytest.mark.parametrize("beta", [0.3, 0.5, 0.8])
