@@ -17,7 +17,9 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import optimize, signal
+from scipy import optimize
+
+from armlab.dsp import lowpass_causal, second_order_lowpass, zero_phase
 
 __all__ = [
     "FittedModel",
@@ -71,21 +73,21 @@ class ModelFamily:
 
 
 def lowpass2(z: np.ndarray, fc: float, zeta: float, fs: float, axis: int = 0) -> np.ndarray:
-    """Causal 2nd-order low-pass ``w²/(s² + 2ζws + w²)`` (bilinear), started at rest, along ``axis``."""
-    w = 2 * np.pi * fc
-    b, a = signal.bilinear([w * w], [1.0, 2 * zeta * w, w * w], fs)
-    return signal.lfilter(b, a, z, axis=axis)
+    """Causal 2nd-order low-pass ``w²/(s² + 2ζws + w²)``, ``w = 2π fc``, started at rest, along ``axis``.
+
+    :func:`armlab.dsp.second_order_lowpass` with this module's argument order.
+    """
+    return second_order_lowpass(z, fs, fc, zeta, axis=axis)
 
 
 def sensor_lowpass(z: np.ndarray, cutoff_hz: float, fs: float, axis: int = 0) -> np.ndarray:
     """The force channel's 2nd-order Butterworth low-pass (causal), started at ``z``'s first value.
 
     Starting from the first sample (not from zero) matches a sensor that was at rest on that
-    value before the record: no start-up step the data lack.
+    value before the record: no start-up step the data lack. :func:`armlab.dsp.lowpass_causal`
+    with ``start="deviation"``.
     """
-    b, a = signal.butter(2, cutoff_hz, fs=fs)
-    z0 = np.take(z, [0], axis=axis)
-    return signal.lfilter(b, a, z - z0, axis=axis) + z0
+    return lowpass_causal(z, fs, cutoff_hz, 2, axis=axis, start="deviation")
 
 
 def shift_columns(t: np.ndarray, z: np.ndarray, delay: float) -> np.ndarray:
@@ -156,7 +158,7 @@ class _Problem:
         cols = [self.family.columns(tr, self.model, theta) for tr in self.trials]
         if self.hp is None:
             return cols
-        return [signal.sosfiltfilt(self.hp, c, axis=0) for c in cols]
+        return [zero_phase(self.hp, c, axis=0) for c in cols]
 
     def solve(self, theta):
         phis = self.design(theta)

@@ -4,6 +4,10 @@ The recorded hand position is mapped to joint angles by analytic inverse kinemat
 filtered without phase lag, and differentiated numerically; the hand force becomes joint torque
 through ``tau_ext = J(q)^T F``. Increments ``dq`` and ``dtau`` are taken from the mean over the
 steady state before the perturbation onset.
+
+The filter and the differences are :func:`armlab.dsp.lowpass_zero_phase` and
+:func:`armlab.dsp.five_point_derivatives`, re-exported here as ``lowpass_zero_phase`` and
+``differentiate``.
 """
 
 from __future__ import annotations
@@ -11,8 +15,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import signal
 
+from armlab.dsp import five_point_derivatives as differentiate
+from armlab.dsp import lowpass_zero_phase
 from armlab.errors import ConfigError, DataError
 from armlab.models.planar_arm import inverse, jacobian
 
@@ -102,74 +107,6 @@ class JointSignals:
     @property
     def n_samples(self) -> int:
         return int(self.q.shape[1])
-
-
-def lowpass_zero_phase(
-    x: np.ndarray, fs_hz: float, cutoff_hz: float | None, order: int = 4, axis: int = -2, padtype: str = "odd"
-) -> np.ndarray:
-    """Phase-free Butterworth low-pass (``sosfiltfilt``), Sec. IV-C of the conditioning paper.
-
-    Args:
-        x: (..., n_samples, n_axes) signal; filtered along ``axis``.
-        fs_hz: Hz, sample rate.
-        cutoff_hz: Hz, -3 dB frequency of the one-way filter, in (0, fs_hz / 2); ``None`` returns a
-            copy of ``x`` unchanged.
-        order: Butterworth order of the one-way filter.
-        axis: time axis.
-        padtype: ``sosfiltfilt``'s edge extension: ``"odd"`` pins the end samples to their raw
-            values; ``"even"`` mirrors them, so an end sample's noise is band-limited like the
-            others' (the diagnosis's torque).
-
-    Returns:
-        Filtered array, same shape as ``x``.
-    """
-    x = np.asarray(x, dtype=float)
-    if cutoff_hz is None:
-        return x.copy()
-    nyquist = 0.5 * fs_hz
-    if not (0 < cutoff_hz < nyquist):
-        raise ConfigError(
-            f"cutoff_hz must lie in (0, {nyquist:g}) Hz (below Nyquist at fs={fs_hz:g} Hz), got {cutoff_hz!r}"
-        )
-    sos = signal.butter(int(order), cutoff_hz, btype="low", fs=fs_hz, output="sos")
-    try:
-        return signal.sosfiltfilt(sos, x, axis=axis, padtype=padtype)
-    except ValueError as err:
-        raise DataError(
-            f"signal too short for an order-{order} zero-phase filter along axis {axis} "
-            f"(shape {x.shape}): {err}"
-        ) from None
-
-
-def differentiate(x: np.ndarray, fs_hz: float, axis: int = -2) -> tuple[np.ndarray, np.ndarray]:
-    """First and second time derivatives by fourth-order central differences (Sec. IV-C).
-
-    Interior samples use the five-point stencils
-    ``x' = (-x[+2] + 8 x[+1] - 8 x[-1] + x[-2]) / (12 dt)`` and
-    ``x'' = (-x[+2] + 16 x[+1] - 30 x[0] + 16 x[-1] - x[-2]) / (12 dt²)`` (truncation
-    ``O(dt⁴)``); the two samples at each end use ``np.gradient`` (second order). Fourth order
-    matters for the conditioning paper's shortest windows: a 50 ms quintic sampled at 1 kHz has a
-    ~0.8 % acceleration error with ``np.gradient`` applied twice (an effective 2 dt stencil),
-    which the ill-conditioned 11-parameter fit (cond(W) ~ 3e3) turns into a few % error in K.
-
-    Args:
-        x: (..., n_samples, n_axes) signal (n_samples >= 5 along ``axis``).
-        fs_hz: Hz, sample rate.
-        axis: time axis.
-
-    Returns:
-        ``(xd, xdd)`` shaped like ``x``, in units of x per s and per s².
-    """
-    x = np.asarray(x, dtype=float)
-    if x.shape[axis] < 5:
-        raise DataError(f"need at least 5 samples along axis {axis} to differentiate, got {x.shape[axis]}")
-    dt = 1.0 / fs_hz
-    xm = np.moveaxis(x, axis, 0)
-    xd = np.gradient(xm, dt, axis=0, edge_order=2)
-    xdd = np.gradient(xd, dt, axis=0, edge_order=2)
-    xd[2:-2] = (-xm[4:] + 8.0 * xm[3:-1] - 8.0 * xm[1:-3] + xm[:-4]) / (12.0 * dt)
-    xdd[2:-2] = (-xm[4:] + 16.0 * xm[3:-1] - 30.0 * xm[2:-2] + 16.0 * xm[1:-3] - xm[:-4]) / (12.0 * dt * dt)
-    return np.moveaxis(xd, 0, axis), np.moveaxis(xdd, 0, axis)
 
 
 def _baseline_mean(x: np.ndarray, onset: np.ndarray, n_base: int) -> np.ndarray:

@@ -16,6 +16,10 @@ of its peak at the very ends, and by no more than in the interior from ~0.75 s i
 ``scipy.signal.savgol_coeffs`` solves an unscaled Vandermonde system (condition ~1e11 for
 ``W = 151``, ``N = 6``): its smoothing taps sum to 1 + 6.1e-6, a DC gain error far below
 measurement noise; :func:`filter_response` uses the same taps and so reproduces it.
+
+The SG and Butterworth stages are :mod:`armlab.dsp`'s (:func:`~armlab.dsp.savgol`,
+:func:`~armlab.dsp.butterworth`, :func:`~armlab.dsp.zero_phase`); this module holds the paper's
+settings and the two filters composed from them.
 """
 
 from __future__ import annotations
@@ -25,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import signal
 
+from armlab.dsp import butterworth, savgol, savgol_taps, sosfiltfilt_padlen, zero_phase
 from armlab.errors import ConfigError, DataError
 
 __all__ = [
@@ -107,11 +112,13 @@ class SmoothingSpec:
             ConfigError: ``lowpass_hz`` is at or above the Nyquist frequency ``fs_hz / 2``.
         """
         sos = self._butter(fs_hz)
-        needed = self.sg_window if sos is None else max(self.sg_window, _padlen(sos) + 1)
+        needed = self.sg_window if sos is None else max(self.sg_window, sosfiltfilt_padlen(sos) + 1)
         if n_samples < needed:
             why = [f"{self.sg_window} for the SG window"]
             if sos is not None:
-                why.append(f"{_padlen(sos) + 1} to pad the zero-phase order-{self.lowpass_order} low-pass")
+                why.append(
+                    f"{sosfiltfilt_padlen(sos) + 1} to pad the zero-phase order-{self.lowpass_order} low-pass"
+                )
             raise DataError(
                 f"signal has {n_samples} samples along its time axis; need at least {needed} "
                 f"({' and '.join(why)})"
@@ -129,21 +136,11 @@ class SmoothingSpec:
                 f"lowpass_hz = {self.lowpass_hz:g} Hz must lie below the Nyquist frequency "
                 f"{nyquist:g} Hz (fs = {fs_hz:g} Hz), or be None for no low-pass"
             )
-        return signal.butter(self.lowpass_order, self.lowpass_hz, btype="low", fs=fs_hz, output="sos")
+        return butterworth(self.lowpass_hz, fs_hz, self.lowpass_order)
 
 
 def _next_odd_above(n: int) -> int:
     return n + 1 if n % 2 == 0 else n + 2
-
-
-def _padlen(sos: np.ndarray) -> int:
-    """``sosfiltfilt``'s default odd-extension length; the signal must be longer than this.
-
-    Same rule as ``scipy.signal.sosfiltfilt`` (scipy/signal/_signaltools.py): 3 x the number of
-    taps ``2 n_sections + 1``, less the trailing zero coefficients of first-order sections.
-    """
-    ntaps = 2 * sos.shape[0] + 1 - min(int(np.sum(sos[:, 2] == 0)), int(np.sum(sos[:, 5] == 0)))
-    return 3 * ntaps
 
 
 def _prepare(
@@ -165,10 +162,8 @@ def _filter(
     x: np.ndarray, fs_hz: float, spec: SmoothingSpec, axis: int, sos: np.ndarray | None, deriv: int
 ) -> np.ndarray:
     """SG estimate of derivative ``deriv`` (delta = 1/fs, so per second), then the low-pass if any."""
-    y = signal.savgol_filter(
-        x, spec.sg_window, spec.sg_order, deriv=deriv, delta=1.0 / fs_hz, axis=axis, mode="interp"
-    )
-    return y if sos is None else signal.sosfiltfilt(sos, y, axis=axis)
+    y = savgol(x, fs_hz, spec.sg_window, spec.sg_order, deriv=deriv, axis=axis)
+    return y if sos is None else zero_phase(sos, y, axis=axis)
 
 
 def smooth(x: np.ndarray, fs_hz: float, spec: SmoothingSpec | None = None, axis: int = 0) -> np.ndarray:
@@ -203,7 +198,7 @@ def lowpass(x: np.ndarray, fs_hz: float, spec: SmoothingSpec | None = None, axis
     """
     spec = SmoothingSpec() if spec is None else spec
     x, sos = _prepare(x, fs_hz, spec, axis)
-    return x if sos is None else signal.sosfiltfilt(sos, x, axis=axis)
+    return x if sos is None else zero_phase(sos, x, axis=axis)
 
 
 def differentiate(
@@ -285,7 +280,7 @@ def filter_response(
     advance = np.exp(1j * 2.0 * np.pi * f / fs_hz * half)
     out = []
     for deriv in (0, 1):
-        taps = signal.savgol_coeffs(spec.sg_window, spec.sg_order, deriv=deriv, delta=1.0 / fs_hz, use="conv")
+        taps = savgol_taps(fs_hz, spec.sg_window, spec.sg_order, deriv=deriv)
         _, h = signal.freqz(taps, worN=f, fs=fs_hz)
         h = h * advance
         # drop the round-off part: the symmetric (antisymmetric) taps give a real (imaginary) response

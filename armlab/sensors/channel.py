@@ -19,8 +19,8 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import signal
 
+from armlab.dsp import lowpass_causal
 from armlab.errors import ConfigError, DataError
 
 __all__ = [
@@ -101,20 +101,6 @@ class ChannelSpec:
         return int(round(self.delay_s * fs_hz))
 
 
-def _lowpass(x: np.ndarray, fs_hz: float, bandwidth_hz: float, order: int) -> np.ndarray:
-    """Causal Butterworth low-pass along axis 1, started in steady state at each trial's first sample.
-
-    The sensor has been running long before the record starts, so its filter state is initialised
-    to the steady state of a constant input equal to the first sample: a constant signal passes
-    unchanged, and no start-up transient appears.
-    """
-    b, a = signal.butter(order, bandwidth_hz, btype="low", fs=fs_hz)
-    zi = signal.lfilter_zi(b, a)  # (order,) steady state for a unit step
-    zi_full = zi[None, :, None] * x[:, :1, :]  # (n_trials, order, n_axes)
-    y, _ = signal.lfilter(b, a, x, axis=1, zi=zi_full)
-    return y
-
-
 def apply_channel(
     x: np.ndarray,
     fs_hz: float,
@@ -177,7 +163,9 @@ def apply_channel(
         return y
 
     if spec.bandwidth_hz is not None:
-        y = _lowpass(y, fs_hz, spec.bandwidth_hz, spec.filter_order)
+        # the sensor ran long before the record: its filter starts in the steady state of each
+        # trial's first sample, so a constant passes unchanged and no start-up transient appears
+        y = lowpass_causal(y, fs_hz, spec.bandwidth_hz, spec.filter_order, axis=1, start="steady")
     if n_delay > 0:
         y[:, n_delay:, :] = y[:, :-n_delay, :].copy()
         y[:, :n_delay, :] = y[:, :1, :]  # hold the first sample: the signal was there before the record

@@ -55,6 +55,7 @@ from mujoco import rollout as mj_rollout
 from scipy import interpolate, signal
 
 from armlab.config.effects import EffectsConfig, Reflex, enabled_effects
+from armlab.dsp import butterworth, second_order_ba, second_order_lowpass
 from armlab.errors import ConfigError, DataError, SimulationError
 from armlab.models.joint_1dof_scene import Joint1DofScene, JointSubject, build_joint_1dof_scene
 from armlab.sensors.channel import ChannelSpec, apply_channel
@@ -124,11 +125,6 @@ class JointRecording:
     timestep_s: float
 
 
-def _reflex_filter(reflex: Reflex, fs_hz: float) -> tuple[np.ndarray, np.ndarray]:
-    w = 2.0 * math.pi * reflex.cutoff_hz  # rad/s
-    return signal.bilinear([w * w], [1.0, 2.0 * reflex.damping_ratio * w, w * w], fs_hz)
-
-
 def _reflex_delay(reflex: Reflex, fs_hz: float) -> int:
     d = int(round(reflex.delay_s * fs_hz))
     if d < 1:
@@ -158,8 +154,8 @@ def reflex_torque(limb_velocity: np.ndarray, fs_hz: float, reflex: Reflex) -> np
     d = _reflex_delay(reflex, fs_hz)
     u = np.zeros_like(v)
     u[:, d:] = np.maximum(reflex.direction * v[:, :-d], 0.0)
-    b, a = _reflex_filter(reflex, fs_hz)
-    return -reflex.direction * reflex.gain_Nms_per_rad * signal.lfilter(b, a, u, axis=1)
+    lp = second_order_lowpass(u, fs_hz, reflex.cutoff_hz, reflex.damping_ratio, axis=1)
+    return -reflex.direction * reflex.gain_Nms_per_rad * lp
 
 
 def activation_fluctuation(
@@ -180,7 +176,7 @@ def activation_fluctuation(
             "effects.cocontraction_variation.bandwidth_hz must lie in "
             f"(0, {fs_hz / 2}) Hz (Nyquist), got {bandwidth_hz}"
         )
-    sos = signal.butter(2, bandwidth_hz, fs=fs_hz, output="sos")
+    sos = butterworth(bandwidth_hz, fs_hz, 2)
     n_burn = int(math.ceil(_BURN_IN_PERIODS * fs_hz / bandwidth_hz))
     impulse = np.zeros(int(math.ceil(20.0 * fs_hz / bandwidth_hz)))
     impulse[0] = 1.0
@@ -344,7 +340,7 @@ def _rollout_trials(
     if reflex is not None:
         d = _reflex_delay(reflex, fs_hz)
         chunk = d  # a chunk of d samples needs only velocities already simulated
-        rb, ra = _reflex_filter(reflex, fs_hz)
+        rb, ra = second_order_ba(reflex.cutoff_hz, reflex.damping_ratio, fs_hz)
         zi = np.zeros((n_trials, len(ra) - 1))
     if stribeck:
         chunk = 1  # the Stribeck term follows the velocity at the start of each sample

@@ -38,8 +38,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy import signal
 
+from armlab.dsp import butterworth, five_point_derivatives, lowpass_zero_phase, zero_phase
 from armlab.errors import DataError
-from armlab.estimation.processing import differentiate, lowpass_zero_phase
 
 __all__ = [
     "NoiseFloor",
@@ -51,6 +51,10 @@ __all__ = [
 ]
 
 _REPEAT_CORR = 0.99  # 1, position correlation above which two trials are repeats
+_BAND_ORDER = 4  # order of the one-way Butterworth anti-alias low-pass at band_hz
+_SLOW_ORDER = 2  # order of the one-way Butterworth low-pass of the slow (tonic) torque
+# the anti-alias and slow low-passes pad the record's ends by mirroring (see the module docstring)
+_PADTYPE = "even"
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -92,18 +96,15 @@ class PreparedTrial:
     def to_fit_rate(self, z_raw: np.ndarray) -> np.ndarray:
         """A raw-rate signal (n_raw,) or (n_raw, k) band-limited and decimated like the torque."""
         q = int(round(self.raw_fs_hz / self.fs_hz))
-        return _zero_phase_lowpass(z_raw, self.band_hz, self.raw_fs_hz, axis=0)[::q]
-
-
-def _zero_phase_lowpass(z: np.ndarray, fc: float, fs: float, order: int = 4, axis: int = -1) -> np.ndarray:
-    """The zero-phase low-pass with even edge padding (see ``test_first_and_last_samples...``)."""
-    return lowpass_zero_phase(z, fs, fc, order, axis=axis, padtype="even")
+        z = lowpass_zero_phase(z_raw, self.raw_fs_hz, self.band_hz, _BAND_ORDER, axis=0, padtype=_PADTYPE)
+        return z[::q]
 
 
 def _tonic_torque(position: np.ndarray, torque: np.ndarray, slow_hz: float, fs: float) -> np.ndarray:
     """Slow torque not explained by the slow position: ``lp(τ) − (c0 + c1·lp(θ))``, least squares."""
-    slow_t = _zero_phase_lowpass(torque, slow_hz, fs, order=2)
-    slow_x = _zero_phase_lowpass(position, slow_hz, fs, order=2)
+    slow_t, slow_x = (
+        lowpass_zero_phase(z, fs, slow_hz, _SLOW_ORDER, axis=0, padtype=_PADTYPE) for z in (torque, position)
+    )
     basis = np.stack([np.ones_like(slow_x), slow_x], axis=1)
     coef, *_ = np.linalg.lstsq(basis, slow_t, rcond=None)
     return slow_t - basis @ coef
@@ -163,8 +164,11 @@ def prepare_trials(
         # fourth-order central differences: the three-point stencil (np.gradient twice) misses
         # (ωΔt)²/3 = 2 % of the acceleration at 40 Hz, 1 kHz, which left clean referee recordings
         # 13-24 % of the noise variance above the floor; five points leave 4e-5
-        vr, ar = differentiate(xr, fs, axis=0)
-        x, v, a, y = (_zero_phase_lowpass(z, band_hz, fs) for z in (xr, vr, ar, np.asarray(r.torque, float)))
+        vr, ar = five_point_derivatives(xr, fs, axis=0)
+        x, v, a, y = (
+            lowpass_zero_phase(z, fs, band_hz, _BAND_ORDER, axis=0, padtype=_PADTYPE)
+            for z in (xr, vr, ar, np.asarray(r.torque, float))
+        )
         slow = _tonic_torque(xr, np.asarray(r.torque, float), slow_hz, fs)[::q]
         slow = slow - slow.mean()
         rms = float(np.sqrt(np.mean(slow**2)))
@@ -242,7 +246,7 @@ class NoiseFloor:
 
 def highpass_sos(fs_hz: float, highpass_hz: float) -> np.ndarray:
     """Second-order sections of the scoring high-pass (2nd-order Butterworth, applied zero-phase)."""
-    return signal.butter(2, highpass_hz, btype="highpass", fs=fs_hz, output="sos")
+    return butterworth(highpass_hz, fs_hz, 2, btype="high")
 
 
 def noise_floor(records, prepared, *, band_hz: float, highpass_hz: float, nperseg: int = 512) -> NoiseFloor:
@@ -262,10 +266,9 @@ def noise_floor(records, prepared, *, band_hz: float, highpass_hz: float, nperse
         # over the scored samples only (``train | held``): the excluded ends carry the filters'
         # start and end transients, which the scores never see
         diffs = [
-            (
-                (signal.sosfiltfilt(hp, prepared[g[k]].y) - signal.sosfiltfilt(hp, prepared[g[0]].y))
-                / np.sqrt(2.0)
-            )[prepared[g[0]].train | prepared[g[0]].held]
+            ((zero_phase(hp, prepared[g[k]].y) - zero_phase(hp, prepared[g[0]].y)) / np.sqrt(2.0))[
+                prepared[g[0]].train | prepared[g[0]].held
+            ]
             for g in groups
             for k in range(1, len(g))
         ]
@@ -304,7 +307,7 @@ def _difference_floor(records, prepared, band_hz, hp, nperseg: int) -> NoiseFloo
     f = np.fft.rfftfreq(nperseg, 1.0 / fs)
     # white noise of variance s2 over 0..raw_fs/2 has the one-sided density 2*s2/raw_fs; the
     # zero-phase (forward-backward) filters apply their power gain twice
-    _, h_lp = signal.sosfreqz(signal.butter(4, band_hz, fs=raw_fs, output="sos"), worN=f, fs=raw_fs)
+    _, h_lp = signal.sosfreqz(butterworth(band_hz, raw_fs, _BAND_ORDER), worN=f, fs=raw_fs)
     _, h_hp = signal.sosfreqz(hp, worN=f, fs=fs)
     psd = 2.0 * s2 / raw_fs * np.abs(h_lp) ** 4 * np.abs(h_hp) ** 4
     return NoiseFloor(
