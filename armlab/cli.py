@@ -68,14 +68,7 @@ def _usage() -> str:
             lines.append(f"      config groups: {' '.join(groups)}")
             if p.reestimate_group:
                 lines.append(f"      armlab estimate takes {p.reestimate_group}.<field>=<value>")
-    lines += [
-        "",
-        "examples:",
-        "  armlab run protocol=conditioning_window seed=3 arm=planar_linear reflex.enabled=false",
-        "  armlab run --multirun seed=0,1,2 hydra/launcher=joblib",
-        "  armlab run protocol=fractional_elbow elbow.impedance=fractional elbow.fractional_order=0.5",
-        "  armlab run protocol=virtual_force_sensor capstan.cable=rigid capstan.drag=false",
-    ]
+    lines += ["", "examples:"] + [f"  armlab {e}" for p in registry.protocols() for e in p.examples]
     return "\n".join(lines) + "\n"
 
 

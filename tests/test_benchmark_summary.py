@@ -15,7 +15,7 @@ from armlab.config.diagnosis import RefereeConfig
 from armlab.diagnosis import scoring
 from armlab.diagnosis.benchmark_summary import TARGETS, format_benchmark, summarise
 from armlab.diagnosis.scoring import expected_verdict
-from armlab.protocols.joint_1dof.diagnosis.referee import JOINT_CLASSES
+from armlab.protocols.joint_1dof.diagnosis.referee import JOINT_CLASSES, describe
 
 
 def score_case(cls, results):
@@ -127,7 +127,8 @@ def test_missing_figures_are_none_not_met_or_failed():
 
 def test_markdown_table():
     s = summarise(_cases()) | {"timing_s": 12.0, "median_diagnosis_s": 1.5}
-    md = format_benchmark(s, RefereeConfig(protocol="joint_1dof", replicates=2))
+    ref = RefereeConfig(protocol="joint_1dof", replicates=2)
+    md = format_benchmark(s, ref, describe(ref))
     assert md.startswith("# Diagnosis benchmark — protocol `joint_1dof`\n")
     assert "5 classes × 2 replicates = 10 datasets" in md
     assert "| top-1 accuracy where ENR ≥ 1 (incl. none) | 75 % | 90 % | False |" in md

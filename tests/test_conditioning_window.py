@@ -39,7 +39,7 @@ def exact():
         sensors=SensorsConfig(preset="ideal"),
         reflex=ReflexConfig(enabled=False),
         estimator=EstimatorConfig(lowpass_hz=None),
-        scenario=ScenarioConfig(n_trials=13),
+        scenario=ScenarioConfig(name="conditioning_window", n_trials=13),
     )
     return _run(cfg)
 
@@ -75,7 +75,7 @@ def test_ground_truth_is_consistent_with_the_model(exact):
 @pytest.fixture(scope="module")
 def noisy_pair():
     # default (realistic) sensors, Hill muscles, compliant cuff; reflex off and on
-    base = {"scenario": ScenarioConfig(k_values=[26])}
+    base = {"scenario": ScenarioConfig(name="conditioning_window", k_values=[26])}
     off = _run(ConditioningWindowConfig(reflex=ReflexConfig(enabled=False), **base))[1]
     on = _run(ConditioningWindowConfig(**base))[1]
     return off, on
@@ -104,11 +104,11 @@ def test_reflex_drives_the_estimate_away_from_intrinsic_truth(noisy_pair):
 
 
 def test_same_seed_bit_identical_different_seed_differs():
-    cfg = ConditioningWindowConfig(scenario=ScenarioConfig(k_values=[1], n_trials=4))
+    cfg = ConditioningWindowConfig(scenario=ScenarioConfig(name="conditioning_window", k_values=[1], n_trials=4))
     a = simulate_protocol(cfg)[0].trials
     b = simulate_protocol(cfg)[0].trials
     c = simulate_protocol(
-        ConditioningWindowConfig(seed=1, scenario=ScenarioConfig(k_values=[1], n_trials=4))
+        ConditioningWindowConfig(seed=1, scenario=ScenarioConfig(name="conditioning_window", k_values=[1], n_trials=4))
     )[0].trials
     for name in a.channels:
         assert np.array_equal(a.channels[name], b.channels[name]), name
@@ -117,7 +117,7 @@ def test_same_seed_bit_identical_different_seed_differs():
 
 def test_window_longer_than_record_is_rejected():
     cfg = ConditioningWindowConfig(
-        scenario=ScenarioConfig(k_values=[1], n_trials=4), estimator=EstimatorConfig(t_obs_s=[5.0])
+        scenario=ScenarioConfig(name="conditioning_window", k_values=[1], n_trials=4), estimator=EstimatorConfig(t_obs_s=[5.0])
     )
     rec, scenario = simulate_protocol(cfg)
     with pytest.raises(ConfigError, match="longer than the recorded data"):
@@ -128,7 +128,7 @@ def test_linearisation_bias_is_reported_and_exceeds_the_linear_variant():
     # Exact data except for the muscle model: the linear variant leaves only MuJoCo's integration
     # error; the Hill muscle's curved force-length-velocity relations leave a real bias, which
     # issue 2's measurement puts at K 0.4 %, D 3.1 % at T_obs = 370 ms.
-    small = ScenarioConfig(k_values=[1, 26], n_trials=13)
+    small = ScenarioConfig(name="conditioning_window", k_values=[1, 26], n_trials=13)
     hill = linearisation_bias(ConditioningWindowConfig(scenario=small))
     linear = linearisation_bias(ConditioningWindowConfig(arm=ArmConfig(muscle="linear"), scenario=small))
     assert hill["muscle"] == "hill" and hill["t_obs_s"] == pytest.approx(0.37)

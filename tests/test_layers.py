@@ -167,3 +167,42 @@ def test_armlab_layers():
     assert "armlab.errors" in sources and "armlab" in packages
     problems = violations(sources, packages, LAYERS)
     assert not problems, f"{len(problems)} layer violations:\n" + "\n".join(problems)
+
+
+def sibling_imports(sources: Mapping[str, str], packages: set[str], parent: str) -> list[str]:
+    """Imports from one package below ``parent`` into another one below it (``a.x -> b.y``)."""
+    known = set(sources)
+    depth = len(parent.split(".")) + 1
+    found = []
+    for name, src in sorted(sources.items()):
+        if not name.startswith(parent + ".") or len(name.split(".")) < depth:
+            continue
+        own = ".".join(name.split(".")[:depth])
+        for imported in sorted(imports_of(name, src, packages, known)):
+            other = ".".join(imported.split(".")[:depth])
+            if imported.startswith(parent + ".") and other in packages and other != own:
+                found.append(f"{name} -> {imported}")
+    return found
+
+
+def test_sibling_check_reports_one_protocol_importing_another():
+    sources = {
+        "pkg.protocols": "",
+        "pkg.protocols.base": "",
+        "pkg.protocols.a": "from pkg.protocols.base import P\n",
+        "pkg.protocols.a.x": "from pkg.protocols.b.y import f\n",
+        "pkg.protocols.b": "",
+        "pkg.protocols.b.y": "from pkg.protocols.a import x\n",
+    }
+    packages = {"pkg.protocols", "pkg.protocols.a", "pkg.protocols.b"}
+    assert sibling_imports(sources, packages, "pkg.protocols") == [
+        "pkg.protocols.a.x -> pkg.protocols.b.y",
+        "pkg.protocols.b.y -> pkg.protocols.a.x",
+    ]
+
+
+def test_protocol_packages_do_not_import_each_other():
+    # each protocol is a plug-in: it may use the interface, the core and the layers below, never
+    # another protocol (the registry, at protocols level, imports them all and is no package)
+    sources, packages = scan()
+    assert sibling_imports(sources, packages, "armlab.protocols") == []

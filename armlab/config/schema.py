@@ -176,7 +176,7 @@ class SensorsConfig:
 class ScenarioConfig:
     """Which perturbation timeline (``scenarios/<name>.yaml``) and optional subsetting."""
 
-    name: str = "conditioning_window"
+    name: str = ""  # scenarios/<name>.yaml; each protocol's schema and scenario group set it
     k_values: list[int] | None = None  # window indices to run; None = all in the scenario file
     n_trials: int | None = None  # trials per window; None = the scenario file's number
 

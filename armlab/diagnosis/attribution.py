@@ -29,10 +29,12 @@ import numpy as np
 from armlab.config.diagnosis import DiagnosisConfig
 from armlab.config.effects import EFFECTS
 from armlab.diagnosis.families import FittedModel, ModelFamily, Surrogate, fit_model
+from armlab.errors import ConfigError
 
 __all__ = [
     "Selection",
     "held_out_gap",
+    "select_candidates",
     "select_effects",
 ]
 
@@ -44,6 +46,23 @@ def held_out_gap(model: FittedModel, trials, y_band) -> tuple[float, float, list
     rss = [float(np.sum(r[tr.held] ** 2)) for r, tr in zip(model.residuals, trials, strict=True)]
     tss = [float(np.sum(y[tr.held] ** 2)) for y, tr in zip(y_band, trials, strict=True)]
     return sum(rss) / sum(tss), sum(rss), [a / b for a, b in zip(rss, tss, strict=True)]
+
+
+def select_candidates(cfg: DiagnosisConfig, surrogates, protocol: str) -> list[str]:
+    """The candidate list after ``candidates`` / ``exclude`` (unknown names raise ConfigError).
+
+    ``surrogates``: the protocol's candidates by name; ``protocol``: its name, for the message.
+    """
+    valid = list(surrogates)
+    chosen = list(cfg.candidates) if cfg.candidates is not None else valid
+    for name in [*chosen, *cfg.exclude]:
+        if name not in valid:
+            raise ConfigError(f"unknown candidate effect {name!r} for {protocol}; valid: {valid}")
+    out = [n for n in chosen if n not in cfg.exclude]
+    if not out:
+        raise ConfigError(f"no candidate effects left after exclude={cfg.exclude}; valid: {valid}")
+    return out
+
 
 
 @dataclass(frozen=True, eq=False)

@@ -29,7 +29,7 @@ def _rate(flags) -> float | None:
 
 
 def summarise(cases: list[dict]) -> dict:
-    """Aggregate per-case scores (see :func:`armlab.protocols.joint_1dof.diagnosis.referee.score_case`)."""
+    """Aggregate per-case scores (see :func:`armlab.diagnosis.scoring.score_case`)."""
     classes = list(dict.fromkeys(c["class"] for c in cases))
     labels = sorted({c["predicted"] for c in cases} | {"none", "unknown"})
     confusion = {k: {lab: 0 for lab in labels} for k in classes}
@@ -87,20 +87,9 @@ def _pct(x) -> str:
     return "—" if x is None else f"{100 * x:.0f} %"
 
 
-def format_benchmark(summary: dict, ref) -> str:
-    """The benchmark as Markdown (``benchmark.md``)."""
-    if ref.protocol == "conditioning_window":
-        data = (
-            f"{ref.cond_trials} quintic trials per window k = {list(ref.cond_windows)} "
-            f"(T_k = {', '.join(f'{40 + 10 * k} ms' for k in ref.cond_windows)}) "
-            "in six directions at 1000 Hz; "
-            f"F/T force noise {ref.force_noise_N:g} N"
-        )
-    else:
-        data = (
-            f"{ref.n_trials} trials × {ref.trial_s:g} s at {ref.fs_hz:g} Hz; "
-            f"torque noise {ref.noise_std_Nm:g} N·m"
-        )
+def format_benchmark(summary: dict, ref, data: str) -> str:
+    """The benchmark as Markdown (``benchmark.md``); ``data`` describes the referee's datasets
+    (the protocol's :attr:`Referee.describe`)."""
     lines = [
         f"# Diagnosis benchmark — protocol `{ref.protocol}`",
         "",

@@ -12,7 +12,7 @@ from collections.abc import Mapping, Sequence
 from pathlib import PurePath
 from typing import Any
 
-#: Readable names of the joint_1dof candidates (the catalogue key is printed beside them).
+#: Readable names of the catalogue candidates (the catalogue key is printed beside them).
 LABELS = {
     "reflex": "a stretch reflex",
     "cuff_compliance": "cuff (limb–pedal interface) compliance",
@@ -326,7 +326,7 @@ def noise_words(source: str) -> str:
 def settings_lines(results: Mapping[str, Any], data_path: str, sources: Sequence[str]) -> list[str]:
     s = results.get("settings") or {}
     out = ["## Settings and noise floor", ""]
-    out.append(f"- **Data:** `{data_path}`; protocol `{results.get('protocol', 'joint_1dof')}`.")
+    out.append(f"- **Data:** `{data_path}`; protocol `{results.get('protocol', '?')}`.")
     if s:
         hold = float(s.get("holdout_fraction", 1 / 3))
         out.append(

@@ -71,10 +71,13 @@ class Referee:
         make_dataset: ``(cls, replicate, RefereeConfig, DiagnosisConfig, folder) -> Dataset``:
             simulate one pseudo-real dataset with the class's hidden effects and write its trial
             files into ``folder`` (:class:`armlab.diagnosis.scoring.Dataset`).
+        describe: ``(RefereeConfig) -> str``: its datasets in words (trials, rate, noise), for
+            ``benchmark.md``.
     """
 
     classes: Mapping[str, tuple[tuple[str, ...], tuple[str, ...]]]
     make_dataset: Callable[[str, int, RefereeConfig, DiagnosisConfig, Path], Any]
+    describe: Callable[[RefereeConfig], str]
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -145,6 +148,7 @@ class Protocol:
             ``armlab effects protocol=<name>`` lists), applied by its simulation or not.
         diagnosis: its ``armlab diagnose`` hooks, if any.
         commands: extra CLI verbs.
+        examples: command lines for ``armlab --help`` (without the leading ``armlab``).
     """
 
     name: str
@@ -161,6 +165,7 @@ class Protocol:
     catalogue: tuple[str, ...] = ()
     diagnosis: DiagnosisHooks | None = None
     commands: tuple[Command, ...] = ()
+    examples: tuple[str, ...] = ()
 
     @property
     def runs(self) -> bool:

@@ -116,5 +116,6 @@ def run_benchmark(overrides: list[str] | None, out_dir: Path) -> tuple[Path, dic
     summary["timing_s"] = time.perf_counter() - t0
     summary["median_diagnosis_s"] = float(np.median([c["seconds"] for c in cases]))
     write_json(out / "benchmark.json", {"summary": summary, "cases": cases})
-    write_new(out / "benchmark.md", format_benchmark(summary, ref))
+    describe = registry.get(ref.protocol, need="referee").diagnosis.referee.describe
+    write_new(out / "benchmark.md", format_benchmark(summary, ref, describe(ref)))
     return out, summary

@@ -206,7 +206,7 @@ def _check_inputs(
     bad = [n for n in on if n not in MODEL_EFFECTS + SENSOR_EFFECTS]
     if bad:
         raise ConfigError(
-            f"effects {bad} do not apply to the joint_1dof protocol; the ones that apply: "
+            f"effects {bad} are not simulated by the 1-DoF joint rig; the ones it simulates: "
             f"{list(MODEL_EFFECTS + SENSOR_EFFECTS)}"
         )
     return ref

@@ -163,12 +163,18 @@ def plot_vfs_figures(
 
 
 def write_vfs_recording(
-    path: str | Path, trials: TrialSet, results: Mapping[str, Any] | None = None, max_hz: float = 100.0
+    path: str | Path,
+    trials: TrialSet,
+    results: Mapping[str, Any] | None = None,
+    max_hz: float = 100.0,
+    *,
+    application_id: str = "armlab",
 ) -> Path:
     """Every trial's ``theta``, ``tau``, ``acc_site``, ``ft_site`` (x, y) and the true end-effector
     position as scalar series ``trials/<kind>_<labels>_<i>/<channel>/<axis>`` on ``trial_time``,
     decimated to ``max_hz`` (the 0-2 Hz motion sampled 50-fold at the default); the tables as
-    the text document ``results``."""
+    the text document ``results``. ``application_id``: the recording's rerun application (the
+    protocol's hook passes ``armlab_<protocol>``)."""
     import rerun as rr
 
     if not (np.isfinite(max_hz) and max_hz > 0):
@@ -176,7 +182,7 @@ def write_vfs_recording(
     p = fresh_path(path, ".rrd")
     step = max(1, int(round(trials.fs_hz / max_hz)))
     times = np.arange(0, trials.n_samples, step) / trials.fs_hz
-    rec = rr.RecordingStream("armlab_virtual_force_sensor")
+    rec = rr.RecordingStream(application_id)
     rec.save(str(p))
     meta = trials.trial_meta
     for i in range(trials.n_trials):

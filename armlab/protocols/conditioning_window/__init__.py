@@ -47,10 +47,16 @@ def _make_dataset(cls, rep, ref, diag_cfg, folder):
     return make_cond_dataset(cls, rep, ref, diag_cfg, folder)
 
 
+def _describe(ref) -> str:
+    from armlab.protocols.conditioning_window.diagnosis.referee import describe
+
+    return describe(ref)
+
+
 def _referee() -> Referee:
     from armlab.protocols.conditioning_window.diagnosis.referee import COND_CLASSES
 
-    return Referee(classes=COND_CLASSES, make_dataset=_make_dataset)
+    return Referee(classes=COND_CLASSES, make_dataset=_make_dataset, describe=_describe)
 
 
 def _candidates() -> tuple[str, ...]:
@@ -77,6 +83,12 @@ PROTOCOL = Protocol(
     outputs=hooks.outputs,
     format_table=hooks.format_table,
     effects=LAB_EFFECTS,
+    examples=(
+        "run protocol=conditioning_window seed=3 arm=planar_linear reflex.enabled=false",
+        "run --multirun protocol=conditioning_window seed=0,1,2 hydra/launcher=joblib",
+        "estimate outputs/conditioning_window/<run> estimator.lowpass_hz=30",
+        "diagnose data=outputs/conditioning_window/<run> protocol=conditioning_window",
+    ),
     catalogue=(
         "reflex",
         "cuff_compliance",

@@ -26,5 +26,5 @@ class ConditioningWindowConfig(ExperimentConfig):
     reflex: ReflexConfig = field(default_factory=ReflexConfig)
     cuff: CuffConfig = field(default_factory=CuffConfig)
     robot: RobotConfig = field(default_factory=RobotConfig)
-    scenario: ScenarioConfig = field(default_factory=ScenarioConfig)
+    scenario: ScenarioConfig = field(default_factory=lambda: ScenarioConfig(name="conditioning_window"))
     estimator: EstimatorConfig = field(default_factory=EstimatorConfig)

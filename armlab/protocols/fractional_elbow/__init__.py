@@ -21,6 +21,10 @@ PROTOCOL = Protocol(
     reestimate=hooks.reestimate,
     outputs=hooks.outputs,
     format_table=hooks.format_table,
+    examples=(
+        "run protocol=fractional_elbow elbow.impedance=fractional elbow.fractional_order=0.5",
+        "estimate outputs/fractional_elbow/<run> frf.welch_window=10000",
+    ),
     catalogue=(
         "reflex",
         "joint_friction",

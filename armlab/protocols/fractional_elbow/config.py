@@ -25,4 +25,4 @@ class FractionalElbowConfig(ExperimentConfig):
     motor: DirectDriveConfig = field(default_factory=DirectDriveConfig)
     frf: FrfConfig = field(default_factory=FrfConfig)
     reflex: ReflexConfig = field(default_factory=ReflexConfig)  # of the Hill elbow (impedance=muscle)
-    scenario: ScenarioConfig = field(default_factory=ScenarioConfig)
+    scenario: ScenarioConfig = field(default_factory=lambda: ScenarioConfig(name="fractional_elbow"))

@@ -46,10 +46,16 @@ def _make_dataset(cls, rep, ref, diag_cfg, folder):
     return make_dataset(cls, rep, ref, diag_cfg, folder)
 
 
+def _describe(ref) -> str:
+    from armlab.protocols.joint_1dof.diagnosis.referee import describe
+
+    return describe(ref)
+
+
 def _referee() -> Referee:
     from armlab.protocols.joint_1dof.diagnosis.referee import JOINT_CLASSES
 
-    return Referee(classes=JOINT_CLASSES, make_dataset=_make_dataset)
+    return Referee(classes=JOINT_CLASSES, make_dataset=_make_dataset, describe=_describe)
 
 
 def _candidates() -> tuple[str, ...]:
@@ -84,6 +90,11 @@ PROTOCOL = Protocol(
         figures=_figures,
         recording=_recording,
         referee=_referee(),
+    ),
+    examples=(
+        "diagnose data=../shared/data/reklab_ankle protocol=joint_1dof diagnosis.per_trial=true",
+        "diagnose-benchmark referee.protocol=joint_1dof referee.replicates=10",
+        "fit-joint ../shared/data/reklab_ankle",
     ),
     commands=(
         Command(

@@ -21,6 +21,10 @@ PROTOCOL = Protocol(
     reestimate=hooks.reestimate,
     outputs=hooks.outputs,
     format_table=hooks.format_table,
+    examples=(
+        "run protocol=virtual_force_sensor capstan.cable=rigid capstan.drag=false",
+        "estimate outputs/virtual_force_sensor/<run> vfs.robot_model=table_vi",
+    ),
     catalogue=(
         "reflex",
         "cuff_compliance",

@@ -42,7 +42,9 @@ def outputs(ctx: OutputContext) -> dict:
     if cfg.output.figures:
         written.update(viz.plot_vfs_figures(ctx.results, ctx.series, out_dir))
     if cfg.output.recording:
-        written["recording"] = viz.write_vfs_recording(out_dir / "trials.rrd", ctx.trials, ctx.results)
+        written["recording"] = viz.write_vfs_recording(
+            out_dir / "trials.rrd", ctx.trials, ctx.results, application_id=f"armlab_{cfg.protocol_name}"
+        )
     return written
 
 

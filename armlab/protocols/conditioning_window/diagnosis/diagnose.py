@@ -13,14 +13,13 @@ from dataclasses import asdict
 import numpy as np
 
 from armlab.config.diagnosis import DiagnosisConfig
-from armlab.diagnosis.attribution import held_out_gap, select_effects
+from armlab.diagnosis.attribution import held_out_gap, select_candidates, select_effects
 from armlab.diagnosis.families import FittedModel
 from armlab.diagnosis.localise import BANDS_HZ, WINDOWS_MS
 from armlab.estimation.joint_ls import PARAM_NAMES
 from armlab.protocols.conditioning_window.diagnosis.data import CHANNELS, CondSet, prepare_cond
 from armlab.protocols.conditioning_window.diagnosis.models import COND_FAMILY, COND_SURROGATES
 from armlab.protocols.conditioning_window.diagnosis.rules import RULES
-from armlab.protocols.joint_1dof.diagnosis.diagnose import candidate_names
 
 __all__ = [
     "BIAS_WINDOWS_S",
@@ -34,7 +33,7 @@ BIAS_WINDOWS_S = (0.12, 0.2, 0.3, 0.4)
 
 def cond_candidates(cfg: DiagnosisConfig) -> list[str]:
     """The candidate list after ``candidates`` / ``exclude`` (unknown names raise ConfigError)."""
-    return candidate_names(cfg, COND_SURROGATES, "conditioning_window")
+    return select_candidates(cfg, COND_SURROGATES, "conditioning_window")
 
 
 def _gap(resid: np.ndarray, y: np.ndarray, noise: np.ndarray, mask: np.ndarray) -> dict:

@@ -33,6 +33,7 @@ from armlab.protocols.conditioning_window.config import ConditioningWindowConfig
 
 __all__ = [
     "COND_CLASSES",
+    "describe",
     "make_cond_dataset",
 ]
 
@@ -57,6 +58,16 @@ COND_CLASSES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "joint_friction+channel_delay": (("joint_friction", "channel_delay"), ()),
     "left_out:reflex": (("reflex",), ("reflex",)),
 }
+
+
+def describe(ref: RefereeConfig) -> str:
+    """The referee's datasets in words (``benchmark.md``)."""
+    return (
+        f"{ref.cond_trials} quintic trials per window k = {list(ref.cond_windows)} "
+        f"(T_k = {', '.join(f'{40 + 10 * k} ms' for k in ref.cond_windows)}) "
+        "in six directions at 1000 Hz; "
+        f"F/T force noise {ref.force_noise_N:g} N"
+    )
 
 
 def _configs(hidden: tuple[str, ...], rng, ref: RefereeConfig):

@@ -13,10 +13,9 @@ import numpy as np
 from scipy import signal
 
 from armlab.config.diagnosis import DiagnosisConfig
-from armlab.diagnosis.attribution import held_out_gap, select_effects
+from armlab.diagnosis.attribution import held_out_gap, select_candidates, select_effects
 from armlab.diagnosis.families import FittedModel
 from armlab.diagnosis.localise import band_breakdown, frf_parameters, residual_tests, window_breakdown
-from armlab.errors import ConfigError
 from armlab.protocols.joint_1dof.diagnosis.data import highpass_sos, noise_floor, prepare_trials
 from armlab.protocols.joint_1dof.diagnosis.models import JOINT_FAMILY, JOINT_SURROGATES
 from armlab.protocols.joint_1dof.diagnosis.rules import RULES
@@ -28,20 +27,9 @@ __all__ = [
 ]
 
 
-def candidate_names(cfg: DiagnosisConfig, surrogates=None, protocol: str = "joint_1dof") -> list[str]:
-    """The candidate list after ``candidates`` / ``exclude`` (unknown names raise ConfigError).
-
-    ``surrogates``: the protocol's candidates by name (default: the joint_1dof ones).
-    """
-    valid = list(JOINT_SURROGATES if surrogates is None else surrogates)
-    chosen = list(cfg.candidates) if cfg.candidates is not None else valid
-    for name in [*chosen, *cfg.exclude]:
-        if name not in valid:
-            raise ConfigError(f"unknown candidate effect {name!r} for {protocol}; valid: {valid}")
-    out = [n for n in chosen if n not in cfg.exclude]
-    if not out:
-        raise ConfigError(f"no candidate effects left after exclude={cfg.exclude}; valid: {valid}")
-    return out
+def candidate_names(cfg: DiagnosisConfig) -> list[str]:
+    """The joint candidates after ``candidates`` / ``exclude`` (unknown names raise ConfigError)."""
+    return select_candidates(cfg, JOINT_SURROGATES, "joint_1dof")
 
 
 def _impedance(model: FittedModel, sign: float) -> list[dict]:

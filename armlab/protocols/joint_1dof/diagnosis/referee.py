@@ -30,6 +30,7 @@ from armlab.diagnosis.scoring import Dataset, log_uniform
 
 __all__ = [
     "JOINT_CLASSES",
+    "describe",
     "make_dataset",
 ]
 
@@ -74,6 +75,11 @@ def _effects_for(hidden: tuple[str, ...], rng) -> tuple[EffectsConfig, dict]:
 def _band_rms(z: np.ndarray, fs: float, lo: float, hi: float) -> float:
     sos = signal.butter(4, [lo, hi], btype="bandpass", fs=fs, output="sos")
     return float(np.sqrt(np.mean(signal.sosfiltfilt(sos, z, axis=-1) ** 2)))
+
+
+def describe(ref: RefereeConfig) -> str:
+    """The referee's datasets in words (``benchmark.md``)."""
+    return f"{ref.n_trials} trials × {ref.trial_s:g} s at {ref.fs_hz:g} Hz; torque noise {ref.noise_std_Nm:g} N·m"
 
 
 def make_dataset(
