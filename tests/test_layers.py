@@ -178,6 +178,8 @@ def sibling_imports(sources: Mapping[str, str], packages: set[str], parent: str)
         if not name.startswith(parent + ".") or len(name.split(".")) < depth:
             continue
         own = ".".join(name.split(".")[:depth])
+        if own not in packages:  # a module beside the packages (the registry, the interface)
+            continue
         for imported in sorted(imports_of(name, src, packages, known)):
             other = ".".join(imported.split(".")[:depth])
             if imported.startswith(parent + ".") and other in packages and other != own:
@@ -193,6 +195,7 @@ def test_sibling_check_reports_one_protocol_importing_another():
         "pkg.protocols.a.x": "from pkg.protocols.b.y import f\n",
         "pkg.protocols.b": "",
         "pkg.protocols.b.y": "from pkg.protocols.a import x\n",
+        "pkg.protocols.registry": "from pkg.protocols import a, b\n",
     }
     packages = {"pkg.protocols", "pkg.protocols.a", "pkg.protocols.b"}
     assert sibling_imports(sources, packages, "pkg.protocols") == [
