@@ -104,11 +104,15 @@ def test_reflex_drives_the_estimate_away_from_intrinsic_truth(noisy_pair):
 
 
 def test_same_seed_bit_identical_different_seed_differs():
-    cfg = ConditioningWindowConfig(scenario=ScenarioConfig(name="conditioning_window", k_values=[1], n_trials=4))
+    cfg = ConditioningWindowConfig(
+        scenario=ScenarioConfig(name="conditioning_window", k_values=[1], n_trials=4)
+    )
     a = simulate_protocol(cfg)[0].trials
     b = simulate_protocol(cfg)[0].trials
     c = simulate_protocol(
-        ConditioningWindowConfig(seed=1, scenario=ScenarioConfig(name="conditioning_window", k_values=[1], n_trials=4))
+        ConditioningWindowConfig(
+            seed=1, scenario=ScenarioConfig(name="conditioning_window", k_values=[1], n_trials=4)
+        )
     )[0].trials
     for name in a.channels:
         assert np.array_equal(a.channels[name], b.channels[name]), name
@@ -117,7 +121,8 @@ def test_same_seed_bit_identical_different_seed_differs():
 
 def test_window_longer_than_record_is_rejected():
     cfg = ConditioningWindowConfig(
-        scenario=ScenarioConfig(name="conditioning_window", k_values=[1], n_trials=4), estimator=EstimatorConfig(t_obs_s=[5.0])
+        scenario=ScenarioConfig(name="conditioning_window", k_values=[1], n_trials=4),
+        estimator=EstimatorConfig(t_obs_s=[5.0]),
     )
     rec, scenario = simulate_protocol(cfg)
     with pytest.raises(ConfigError, match="longer than the recorded data"):

@@ -64,7 +64,6 @@ def select_candidates(cfg: DiagnosisConfig, surrogates, protocol: str) -> list[s
     return out
 
 
-
 @dataclass(frozen=True, eq=False)
 class Selection:
     """Result of the greedy selection.

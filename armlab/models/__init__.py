@@ -11,11 +11,11 @@ from armlab.models.ground_truth import (
     ground_truth,
     joint_impedance,
 )
-from armlab.models.joint_1dof_scene import (
+from armlab.models.joint_rig_scene import (
     PAYLOAD_OWN_INERTIA_KGM2,
     Joint1DofScene,
     JointSubject,
-    build_joint_1dof_scene,
+    build_joint_rig_scene,
 )
 from armlab.models.oustaloup import FractionalElement, oustaloup_zpk
 from armlab.models.robot_fk import (
@@ -57,7 +57,7 @@ __all__ = [
     "Joint1DofScene",
     "JointSubject",
     "PAYLOAD_OWN_INERTIA_KGM2",
-    "build_joint_1dof_scene",
+    "build_joint_rig_scene",
     "named_id",
     "table_i_array",
     "fixture_mjcf",

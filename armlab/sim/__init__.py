@@ -7,7 +7,7 @@ from armlab.sim.hold import (
     preload_activations,
     settle,
 )
-from armlab.sim.joint_1dof import JointRecording, JointSubject, simulate_joint_1dof
+from armlab.sim.joint_rig import JointRecording, JointSubject, simulate_joint_rig
 from armlab.sim.lab import (
     LabRecording,
     record_trials,
@@ -27,7 +27,7 @@ __all__ = [
     "HoldState",
     "JointRecording",
     "JointSubject",
-    "simulate_joint_1dof",
+    "simulate_joint_rig",
     "LabRecording",
     "SimResult",
     "preload_activations",

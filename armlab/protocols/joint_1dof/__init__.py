@@ -2,7 +2,7 @@
 
 Diagnosis only (no ``armlab run``): measured REKLAB-format recordings are diagnosed against the
 nominal I s^2 + B s + K joint, and its referee simulates pseudo-real datasets with the
-higher-fidelity MuJoCo model of ``models/joint_1dof/``. It also brings ``armlab fit-joint``: the
+higher-fidelity MuJoCo model of ``models/joint_rig/``. It also brings ``armlab fit-joint``: the
 FRF and Levy fits of real joint recordings.
 """
 

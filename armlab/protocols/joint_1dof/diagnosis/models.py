@@ -3,7 +3,7 @@
 The nominal simulation of a position-imposed joint is its inverse dynamics, linear in the
 parameters: ``torque = I·θ̈ + B·θ̇ + K·θ`` (the offset is removed by the scoring high-pass).
 Each catalogue effect changes that model in one of three ways, written here in the same
-linear-in-parameters form as the MuJoCo model of :mod:`armlab.sim.joint_1dof` (checked against
+linear-in-parameters form as the MuJoCo model of :mod:`armlab.sim.joint_rig` (checked against
 it in the tests):
 
 - **additive** columns (``reflex``, ``joint_friction``, ``cocontraction_variation``);

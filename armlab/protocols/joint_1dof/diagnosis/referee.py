@@ -1,7 +1,7 @@
 """The blind referee of ``armlab diagnose``: pseudo-real datasets with hidden effects, then scoring.
 
 For the 1-DoF joint protocol every dataset is made by the higher-fidelity MuJoCo simulation
-(:func:`armlab.sim.joint_1dof.simulate_joint_1dof`) of a random subject, under two REKLAB-style
+(:func:`armlab.sim.joint_rig.simulate_joint_rig`) of a random subject, under two REKLAB-style
 pseudo-random position sequences each recorded twice (the repeats give the diagnoser its noise
 floor), with the class's hidden effects at a random magnitude. The trials are written as CSV
 files; the diagnoser is then run on that folder alone (:func:`run_diagnoser`), and never sees
@@ -79,7 +79,10 @@ def _band_rms(z: np.ndarray, fs: float, lo: float, hi: float) -> float:
 
 def describe(ref: RefereeConfig) -> str:
     """The referee's datasets in words (``benchmark.md``)."""
-    return f"{ref.n_trials} trials × {ref.trial_s:g} s at {ref.fs_hz:g} Hz; torque noise {ref.noise_std_Nm:g} N·m"
+    return (
+        f"{ref.n_trials} trials × {ref.trial_s:g} s at {ref.fs_hz:g} Hz; "
+        f"torque noise {ref.noise_std_Nm:g} N·m"
+    )
 
 
 def make_dataset(
@@ -88,7 +91,7 @@ def make_dataset(
     """Simulate and write one dataset of class ``cls`` (deterministic in seed, class, replicate)."""
     from armlab.data.joint_import import write_joint_csv
     from armlab.perturbations.prbs import prbs_position
-    from armlab.sim.joint_1dof import JointSubject, simulate_joint_1dof
+    from armlab.sim.joint_rig import JointSubject, simulate_joint_rig
 
     if cls not in JOINT_CLASSES:
         raise KeyError(f"unknown referee class {cls!r}; valid: {list(JOINT_CLASSES)}")
@@ -108,7 +111,7 @@ def make_dataset(
     seqs = [prbs_position(n, ref.fs_hz, rng=rng) for _ in range(n_seq)]
     reference = np.stack([seqs[i % n_seq] for i in range(ref.n_trials)])
     sim_seed = int(rng.integers(2**32))
-    rec = simulate_joint_1dof(
+    rec = simulate_joint_rig(
         reference,
         ref.fs_hz,
         subject,
@@ -118,10 +121,10 @@ def make_dataset(
     )
     if hidden:
         # noise-free measured torque with and without the hidden effects (same random draws)
-        with_fx = simulate_joint_1dof(
+        with_fx = simulate_joint_rig(
             reference, ref.fs_hz, subject, effects, noise_std_Nm=0.0, rng=np.random.default_rng(sim_seed)
         )
-        base = simulate_joint_1dof(
+        base = simulate_joint_rig(
             reference,
             ref.fs_hz,
             subject,

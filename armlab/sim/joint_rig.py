@@ -2,7 +2,7 @@
 
 A stiff position servo imposes the reference on the motor (encoder); an in-line torque sensor
 between the transmission and the pedal records the torque; the subject's joint is strapped to the
-pedal (:mod:`armlab.models.joint_1dof_scene`). Every trial of a call runs in one threaded
+pedal (:mod:`armlab.models.joint_rig_scene`). Every trial of a call runs in one threaded
 ``mujoco.rollout`` per chunk of samples.
 
 **Sign convention** (that of the REKLAB ankle data, whose torque is in antiphase with position):
@@ -57,7 +57,7 @@ from scipy import interpolate, signal
 from armlab.config.effects import EffectsConfig, Reflex, enabled_effects
 from armlab.dsp import butterworth, second_order_ba, second_order_lowpass
 from armlab.errors import ConfigError, DataError, SimulationError
-from armlab.models.joint_1dof_scene import Joint1DofScene, JointSubject, build_joint_1dof_scene
+from armlab.models.joint_rig_scene import Joint1DofScene, JointSubject, build_joint_rig_scene
 from armlab.sensors.channel import ChannelSpec, apply_channel
 
 __all__ = [
@@ -67,7 +67,7 @@ __all__ = [
     "JointSubject",
     "activation_fluctuation",
     "reflex_torque",
-    "simulate_joint_1dof",
+    "simulate_joint_rig",
 ]
 
 MODEL_EFFECTS = (
@@ -246,11 +246,11 @@ def _check_warnings(datas: list[mujoco.MjData], t_s: float) -> None:
         if data.warning.number.any():  # rollout clears the counters at each call
             bad = {mujoco.mjtWarning(i).name: int(w.number) for i, w in enumerate(data.warning) if w.number}
             raise SimulationError(
-                f"MuJoCo warned while simulating the joint_1dof rig before t = {t_s:.3f} s: {bad}"
+                f"MuJoCo warned while simulating the 1-DoF joint rig before t = {t_s:.3f} s: {bad}"
             )
 
 
-def simulate_joint_1dof(
+def simulate_joint_rig(
     reference: np.ndarray,
     fs_hz: float,
     subject: JointSubject,
@@ -293,9 +293,9 @@ def simulate_joint_1dof(
         act = activation_fluctuation(n_trials, n, fs_hz, cv.depth, cv.bandwidth_hz, rng)
     else:
         act = np.ones((n_trials, n))
-    probe = build_joint_1dof_scene(subject, effects)
+    probe = build_joint_rig_scene(subject, effects)
     sub = _substeps(probe, fs_hz, float(np.max(act)) - 1.0)
-    scene = build_joint_1dof_scene(subject, effects, timestep_s=1.0 / (fs_hz * sub))
+    scene = build_joint_rig_scene(subject, effects, timestep_s=1.0 / (fs_hz * sub))
     rec = _rollout_trials(scene, ref, act, sub, fs_hz, effects)
     torque, position = _sensors(rec["torque"], rec["motor"], t_s, fs_hz, effects, noise_std_Nm, rng)
     return JointRecording(
@@ -378,7 +378,7 @@ def _rollout_trials(
             states, sd = runner.rollout(m, datas, state, ctrl, nstep=ns)
             _check_warnings(datas, i1 / fs_hz)
             if not np.all(np.isfinite(states[:, -1])):
-                raise SimulationError(f"the joint_1dof state became non-finite before t = {i1 / fs_hz:.3f} s")
+                raise SimulationError(f"the joint rig state became non-finite before t = {i1 / fs_hz:.3f} s")
             at = sd[:, ::sub]  # sensordata of the forward pass at each sample instant
             limb_v[:, i0:i1] = scene.sensor(at, "limb_velocity")
             rec["motor"][:, i0:i1] = scene.sensor(at, "encoder")

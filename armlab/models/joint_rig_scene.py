@@ -1,4 +1,4 @@
-"""Build the joint_1dof rig: the MJCF of ``models/joint_1dof`` with a subject and model-level effects.
+"""Build the 1-DoF joint rig: the MJCF of ``models/joint_rig`` with a subject and model-level effects.
 
 The rig is a chain on one axis, every angle absolute about it (rad, one positive direction)::
 
@@ -10,7 +10,7 @@ the pedal hangs on it by the hinge ``cuff`` (θp − θl) and the motor on the p
 angle the servo drives and the encoder reads. A rigid interface (the effect off) deletes its
 hinge, which welds the two bodies; the tendon is rebuilt over the hinges that remain.
 
-What the builder sets (everything else is the file's, see ``models/joint_1dof/README.md``):
+What the builder sets (everything else is the file's, see ``models/joint_rig/README.md``):
 
 - the subject (:class:`JointSubject`): limb inertia, the joint's ``stiffness`` K and ``damping``
   B about the operating angle, the pedal inertia, and the tonic torque (a constant bias of the
@@ -42,7 +42,7 @@ __all__ = [
     "PAYLOAD_OWN_INERTIA_KGM2",
     "Joint1DofScene",
     "JointSubject",
-    "build_joint_1dof_scene",
+    "build_joint_rig_scene",
 ]
 
 # kg·m², each principal inertia of the payload body about its own centre: a near point mass, so
@@ -96,7 +96,7 @@ class JointSubject:
 
 @dataclass(frozen=True, kw_only=True, eq=False)
 class Joint1DofScene:
-    """A compiled joint_1dof rig and its addresses.
+    """A compiled 1-DoF joint rig and its addresses.
 
     Attributes:
         model: the compiled MjModel; ``xml`` its MJCF (saved with a run).
@@ -195,7 +195,7 @@ def _rebuild_tendon(spec: mujoco.MjSpec, hinges: list[str]) -> None:
         tendon.wrap_joint(name, 1.0)
 
 
-def build_joint_1dof_scene(
+def build_joint_rig_scene(
     subject: JointSubject, effects: EffectsConfig, *, timestep_s: float = 1e-4
 ) -> Joint1DofScene:
     """Build and compile the rig for ``subject`` with the model-level effects of ``effects``.
@@ -217,14 +217,14 @@ def build_joint_1dof_scene(
     """
     if not (isinstance(timestep_s, (int, float)) and math.isfinite(timestep_s) and timestep_s > 0):
         raise ConfigError(f"timestep_s must be a finite number > 0 s, got {timestep_s!r}")
-    spec = mujoco.MjSpec.from_file(str(model_file("joint_1dof", "joint_1dof.xml")))
+    spec = mujoco.MjSpec.from_file(str(model_file("joint_rig", "joint_rig.xml")))
     spec.option.timestep = timestep_s
     limb, cuff, trans = spec.joint("limb"), spec.joint("cuff"), spec.joint("transmission")
     body_limb, body_pedal = spec.body("limb"), spec.body("pedal")
     activation = spec.actuator("activation")
     if None in (limb, cuff, trans, body_limb, body_pedal, activation):
         raise ModelError(
-            "models/joint_1dof/joint_1dof.xml needs hinges limb/cuff/transmission, bodies limb/pedal "
+            "models/joint_rig/joint_rig.xml needs hinges limb/cuff/transmission, bodies limb/pedal "
             "and the actuator 'activation'"
         )
     s = subject
@@ -274,7 +274,7 @@ def build_joint_1dof_scene(
     try:
         model = spec.compile()
     except ValueError as exc:
-        raise ModelError(f"joint_1dof rig does not compile: {exc}") from None
+        raise ModelError(f"1-DoF joint rig does not compile: {exc}") from None
     J, A = mujoco.mjtObj.mjOBJ_JOINT, mujoco.mjtObj.mjOBJ_ACTUATOR
 
     def dof(name: str) -> int:

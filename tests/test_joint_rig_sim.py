@@ -1,4 +1,4 @@
-"""Tests for armlab.sim.joint_1dof: the rigid chain, each hidden effect against an independent
+"""Tests for armlab.sim.joint_rig: the rigid chain, each hidden effect against an independent
 computation, the sensor effects, and determinism."""
 
 from __future__ import annotations
@@ -27,8 +27,8 @@ from armlab.config.effects import (
 )
 from armlab.errors import ConfigError, DataError
 from armlab.perturbations import prbs_position
-from armlab.sim import JointSubject, simulate_joint_1dof
-from armlab.sim.joint_1dof import activation_fluctuation, reflex_torque
+from armlab.sim import JointSubject, simulate_joint_rig
+from armlab.sim.joint_rig import activation_fluctuation, reflex_torque
 
 FS = 1000.0
 I, B, K, IP, TONIC = 0.02, 0.8, 150.0, 0.005, 3.0
@@ -46,7 +46,7 @@ def smooth_reference(n_trials: int, seconds: float, band_hz: float = 15.0, rms: 
 
 
 def simulate(ref, effects=None, *, subject=SUBJECT, noise=0.0, seed=1):
-    return simulate_joint_1dof(
+    return simulate_joint_rig(
         ref, FS, subject, effects or EffectsConfig(), noise_std_Nm=noise, rng=np.random.default_rng(seed)
     )
 
@@ -336,8 +336,8 @@ def test_effects_of_other_protocols_are_rejected_with_the_valid_ones_named():
     with pytest.raises(ConfigError) as err:
         simulate(ref, EffectsConfig(cable_drag=CableDrag(), plane_tilt=PlaneTilt(), reflex=Reflex()))
     msg = str(err.value)
-    assert "cable_drag" in msg and "plane_tilt" in msg and "joint_1dof" in msg
-    assert "reflex" in msg.split("apply:")[1]  # the list of valid ones
+    assert "cable_drag" in msg and "plane_tilt" in msg and "joint rig" in msg
+    assert "reflex" in msg.split("simulates:")[1]  # the list of valid ones
 
 
 def test_bad_inputs_raise():

@@ -1,4 +1,4 @@
-"""Tests for armlab.models.joint_1dof_scene: every combination of model-level effects compiles and
+"""Tests for armlab.models.joint_rig_scene: every combination of model-level effects compiles and
 steps without a MuJoCo warning; the builder puts the subject and the effects where they belong."""
 
 from __future__ import annotations
@@ -20,9 +20,9 @@ from armlab.config.effects import (
     TransmissionCompliance,
 )
 from armlab.errors import ConfigError
-from armlab.models.joint_1dof_scene import PAYLOAD_OWN_INERTIA_KGM2, JointSubject, build_joint_1dof_scene
+from armlab.models.joint_rig_scene import PAYLOAD_OWN_INERTIA_KGM2, JointSubject, build_joint_rig_scene
 from armlab.perturbations import prbs_position
-from armlab.sim.joint_1dof import MODEL_EFFECTS, simulate_joint_1dof
+from armlab.sim.joint_rig import MODEL_EFFECTS, simulate_joint_rig
 
 SUBJECT = JointSubject(0.02, 0.8, 120.0, 2.0)
 _ON = {
@@ -49,7 +49,7 @@ def _warnings(data: mujoco.MjData) -> dict[str, int]:
 )
 def test_every_combination_compiles_and_steps_without_warnings(flags):
     effects = _effects(flags)
-    scene = build_joint_1dof_scene(SUBJECT, effects, timestep_s=1.25e-4)
+    scene = build_joint_rig_scene(SUBJECT, effects, timestep_s=1.25e-4)
     data = mujoco.MjData(scene.model)
     data.ctrl[scene.servo_act] = 0.01  # a 10 mrad step of the servo: the stiffest transient
     data.ctrl[scene.activation_act] = 0.3
@@ -59,7 +59,7 @@ def test_every_combination_compiles_and_steps_without_warnings(flags):
     assert np.all(np.isfinite(data.qpos)) and np.all(np.isfinite(data.sensordata))
     # and through the chunked rollout (which raises SimulationError on any MuJoCo warning)
     ref = prbs_position(300, 1000.0, switch_interval_s=0.05, rng=np.random.default_rng(0))[None]
-    rec = simulate_joint_1dof(ref, 1000.0, SUBJECT, effects, noise_std_Nm=0.0, rng=np.random.default_rng(1))
+    rec = simulate_joint_rig(ref, 1000.0, SUBJECT, effects, noise_std_Nm=0.0, rng=np.random.default_rng(1))
     assert np.all(np.isfinite(rec.torque))
 
 
@@ -69,7 +69,7 @@ def test_rigid_interfaces_delete_their_hinges_and_the_tendon_follows(cuff, trans
         cuff_compliance=CuffCompliance(stiffness_Nm_per_rad=700.0, damping_Nms_per_rad=0.4) if cuff else None,
         transmission_compliance=TransmissionCompliance(stiffness_Nm_per_rad=3000.0) if trans else None,
     )
-    scene = build_joint_1dof_scene(SUBJECT, eff)
+    scene = build_joint_rig_scene(SUBJECT, eff)
     m = scene.model
     assert m.nv == 1 + cuff + trans
     assert scene.rigid_cuff is not cuff and scene.rigid_transmission is not trans
@@ -96,7 +96,7 @@ def test_inertias_servo_friction_and_activation_gains():
     eff = EffectsConfig(
         payload_mass=pm, joint_friction=JointFriction(coulomb_Nm=0.2), cocontraction_variation=cv
     )
-    scene = build_joint_1dof_scene(SUBJECT, eff)
+    scene = build_joint_rig_scene(SUBJECT, eff)
     m, data = scene.model, mujoco.MjData(scene.model)
     mujoco.mj_forward(m, data)
     mass = np.zeros((1, 1))
@@ -118,8 +118,8 @@ def test_inertias_servo_friction_and_activation_gains():
 
 def test_no_friction_disables_the_constraint_solver_and_friction_enables_it():
     flag = mujoco.mjtDisableBit.mjDSBL_CONSTRAINT
-    off = build_joint_1dof_scene(SUBJECT, EffectsConfig())
-    on = build_joint_1dof_scene(SUBJECT, EffectsConfig(joint_friction=JointFriction()))
+    off = build_joint_rig_scene(SUBJECT, EffectsConfig())
+    on = build_joint_rig_scene(SUBJECT, EffectsConfig(joint_friction=JointFriction()))
     assert off.model.opt.disableflags & flag and not on.model.opt.disableflags & flag
     # dry friction's constraint time constant is two steps (MuJoCo's stiffest safe value)
     assert on.model.dof_solref[on.limb_dof, 0] == pytest.approx(2 * on.model.opt.timestep)
@@ -143,4 +143,4 @@ def test_subject_validation_names_the_field(kwargs, match):
 
 def test_bad_timestep_raises():
     with pytest.raises(ConfigError, match="timestep_s"):
-        build_joint_1dof_scene(SUBJECT, EffectsConfig(), timestep_s=0.0)
+        build_joint_rig_scene(SUBJECT, EffectsConfig(), timestep_s=0.0)
