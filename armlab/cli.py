@@ -98,19 +98,19 @@ def _run(args: list[str]) -> int:
     import hydra
 
     from armlab.config.store import CONFIG_DIR
-    from armlab.protocols.compose import split_protocol
+    from armlab.protocols.compose import check_effects, split_protocol
 
     multirun = "--multirun" in args or "-m" in args
     overrides = [a for a in args if a not in ("--multirun", "-m")]
     bad = [a for a in overrides if a.startswith("-")]
     if bad:
         return _fail(f"unknown option(s) {bad}; valid: --multirun (or -m) and key=value overrides")
-    if not multirun:
-        compose(overrides)  # validates everything up front: one-line errors
-    else:
-        # validate the first value of each sweep (a,b,c); lists [a,b] are values, not sweeps
-        compose([o if o.partition("=")[2].startswith(("[", "{")) else o.split(",")[0] for o in overrides])
+    # validate everything up front (one-line errors, nothing written); of a sweep (a,b,c) its first
+    # value (lists [a,b] are values, not sweeps)
+    first = [o if o.partition("=")[2].startswith(("[", "{")) else o.split(",")[0] for o in overrides]
+    _, exp = compose(overrides if not multirun else first)
     protocol, overrides = split_protocol(overrides)
+    check_effects(protocol, exp)
 
     def task(cfg) -> None:
         try:
@@ -230,6 +230,13 @@ def _effects(args: list[str]) -> int:
         print(f"    {cls.PHYSICS}")
         print(f"    typical: {cls.SOURCE}")
         print(f"    protocols: {', '.join(p.name for p in registry.protocols() if name in p.catalogue)}")
+        switches = [
+            f"{p.name}: {p.lab_effects[name]}"
+            for p in registry.protocols()
+            if name in p.lab_effects and protocol in (None, p.name)
+        ]
+        if switches:
+            print(f"    part of the lab, switched by: {'; '.join(switches)}")
         for other, trial in cls.CONFUSABLE.items():
             print(f"    confusable with {other}: separate with {trial}")
     return 0

@@ -146,6 +146,11 @@ class Protocol:
             refused, never ignored.
         catalogue: the catalogue effects that can act in this protocol's lab (what
             ``armlab effects protocol=<name>`` lists), applied by its simulation or not.
+        lab_effects: catalogue effects that are part of this protocol's nominal lab, each with
+            the one config field that switches it (``{"reflex": "reflex.enabled"}``): the lab
+            models that physics in its own terms (a muscle-stretch reflex, a translational cuff),
+            so ``effects=[<name>]`` is refused for it and the message names that field. An effect
+            is either applied through the catalogue (``effects``) or mapped here, never both.
         diagnosis: its ``armlab diagnose`` hooks, if any.
         commands: extra CLI verbs.
         examples: command lines for ``armlab --help`` (without the leading ``armlab``).
@@ -163,6 +168,7 @@ class Protocol:
     format_table: Callable[[dict, Any], str] | None = None
     effects: tuple[str, ...] = ()
     catalogue: tuple[str, ...] = ()
+    lab_effects: Mapping[str, str] = field(default_factory=dict)
     diagnosis: DiagnosisHooks | None = None
     commands: tuple[Command, ...] = ()
     examples: tuple[str, ...] = ()

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from dataclasses import fields, is_dataclass
 
+from armlab.config.effects import enabled_effects
 from armlab.config.schema import ExperimentConfig
 from armlab.config.store import CONFIG_DIR, available_options, to_experiment
 from armlab.errors import ConfigError
@@ -15,6 +16,7 @@ from armlab.protocols import registry
 from armlab.protocols.base import Protocol
 
 __all__ = [
+    "check_effects",
     "compose",
     "config_groups",
     "split_protocol",
@@ -85,6 +87,27 @@ def _check(protocol: Protocol, overrides: list[str]) -> None:
             )
 
 
+def check_effects(protocol: Protocol, cfg: ExperimentConfig) -> None:
+    """Refuse a switched-on effect the protocol's simulation does not apply (never ignore it), and
+    one that is part of its lab (switched by the lab's own field: one switch per effect)."""
+    on = [n for n in enabled_effects(cfg.effects) if n not in protocol.effects]
+    lab = {n: protocol.lab_effects[n] for n in on if n in protocol.lab_effects}
+    if lab:  # one switch per physical effect: this lab models it in its own terms
+        raise ConfigError(
+            f"effects {list(lab)} are part of the lab of protocol {protocol.name!r}; switch them with "
+            + ", ".join(f"{path} (and {path.split('.')[0]}.*)" for path in lab.values())
+            + " instead of effects=[...]"
+        )
+    if on:  # never silently ignore a switched-on effect
+        simulating = [p.name for p in registry.protocols() if set(on) <= set(p.effects)]
+        raise ConfigError(
+            f"effects {on} are not simulated by protocol {protocol.name!r} yet; it applies "
+            f"{list(protocol.effects)}"
+            + (f"; protocols that simulate them: {simulating}" if simulating else "")
+            + "; the referees of `armlab diagnose-benchmark` simulate the diagnosis candidates"
+        )
+
+
 def compose(overrides: list[str]):
     """Compose and validate one protocol's experiment.
 
@@ -95,6 +118,8 @@ def compose(overrides: list[str]):
 
     Returns:
         (the composed DictConfig, the typed experiment: an instance of the protocol's schema).
+        Whether its simulation applies the switched-on effects is :func:`check_effects`'s to say
+        (``armlab run`` checks before anything is written).
 
     Raises:
         ConfigError: a bad override, naming the valid choices.

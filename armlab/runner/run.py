@@ -15,7 +15,6 @@ from pathlib import Path
 
 from omegaconf import OmegaConf
 
-from armlab.config.effects import enabled_effects
 from armlab.config.schema import ExperimentConfig
 from armlab.data.h5io import read_trials, write_trials
 from armlab.data.trial import TrialSet
@@ -23,6 +22,7 @@ from armlab.errors import ConfigError, DataError
 from armlab.protocols import registry
 from armlab.protocols._files import write_json, write_new
 from armlab.protocols.base import OutputContext
+from armlab.protocols.compose import check_effects
 
 __all__ = [
     "format_table",
@@ -51,15 +51,7 @@ def _run(cfg: ExperimentConfig, out_dir: Path, config_yaml: str, timing: dict) -
     from armlab import viz  # the only place figures and recordings are made
 
     protocol = registry.get(cfg.protocol_name, need="run")
-    on = [n for n in enabled_effects(cfg.effects) if n not in protocol.effects]
-    if on:  # never silently ignore a switched-on effect
-        simulating = [p.name for p in registry.protocols() if set(on) <= set(p.effects)]
-        raise ConfigError(
-            f"effects {on} are not simulated by protocol {protocol.name!r} yet; it applies "
-            f"{list(protocol.effects)}"
-            + (f"; protocols that simulate them: {simulating}" if simulating else "")
-            + "; the referees of `armlab diagnose-benchmark` simulate the diagnosis candidates"
-        )
+    check_effects(protocol, cfg)
     t0 = time.perf_counter()
     sim = protocol.simulate(cfg)
     timing["simulate_s"] = time.perf_counter() - t0

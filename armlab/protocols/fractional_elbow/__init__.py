@@ -25,6 +25,7 @@ PROTOCOL = Protocol(
         "run protocol=fractional_elbow elbow.impedance=fractional elbow.fractional_order=0.5",
         "estimate outputs/fractional_elbow/<run> frf.welch_window=10000",
     ),
+    lab_effects={"reflex": "reflex.enabled"},
     catalogue=(
         "reflex",
         "joint_friction",

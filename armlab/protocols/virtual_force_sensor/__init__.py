@@ -25,6 +25,11 @@ PROTOCOL = Protocol(
         "run protocol=virtual_force_sensor capstan.cable=rigid capstan.drag=false",
         "estimate outputs/virtual_force_sensor/<run> vfs.robot_model=table_vi",
     ),
+    lab_effects={
+        "cable_drag": "capstan.drag",
+        "transmission_compliance": "capstan.cable",
+        "joint_friction": "capstan.coulomb_Nm",
+    },
     catalogue=(
         "reflex",
         "cuff_compliance",
