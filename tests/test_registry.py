@@ -135,3 +135,10 @@ def test_sweeping_protocols_and_repeating_keys_are_refused():
         compose(["protocol=conditioning_window,fractional_elbow"])
     with pytest.raises(ConfigError, match="seed is given twice"):
         compose(["seed=1", "seed=2"])
+
+
+def test_readme_protocol_table_matches_the_registry():
+    # the docs follow the registry: the README's protocol table has one row per registered protocol
+    readme = (ARMLAB.parent / "README.md").read_text(encoding="utf-8")
+    table = [line.split("|")[1].strip().strip("`") for line in readme.splitlines() if line.startswith("| `")]
+    assert table == registry.names()

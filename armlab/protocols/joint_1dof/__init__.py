@@ -6,62 +6,11 @@ higher-fidelity MuJoCo model of ``models/joint_rig/``. It also brings ``armlab f
 FRF and Levy fits of real joint recordings.
 """
 
-from armlab.config.diagnosis import DiagnosisConfig
-from armlab.protocols.base import Command, DiagnosisHooks, Protocol, Referee
-from armlab.protocols.joint_1dof.diagnosis.rules import RULES
+from armlab.protocols.base import Command, Protocol
+from armlab.protocols.joint_1dof.diagnosis import HOOKS
 from armlab.protocols.joint_1dof.fit_command import run_fit_joint
 
 __all__ = ["PROTOCOL"]
-
-
-def _load(path, cfg: DiagnosisConfig):
-    from armlab.data.joint_import import load_joint_data
-
-    return load_joint_data(path, min_duration_s=cfg.min_duration_s)
-
-
-def _diagnose(data, cfg: DiagnosisConfig):
-    from armlab.protocols.joint_1dof.diagnosis.diagnose import diagnose_joint
-
-    return diagnose_joint(data, cfg)
-
-
-def _report(results, *, data_path: str, figures) -> str:
-    from armlab.protocols.joint_1dof.diagnosis.report import format_report
-
-    return format_report(results, data_path=data_path, figures=figures)
-
-
-def _figures(viz, series, results, out):
-    return viz.diagnosis_figures(series, results, out)
-
-
-def _recording(viz, series, path):
-    return viz.diagnosis_recording(series, path)
-
-
-def _make_dataset(cls, rep, ref, diag_cfg, folder):
-    from armlab.protocols.joint_1dof.diagnosis.referee import make_dataset
-
-    return make_dataset(cls, rep, ref, diag_cfg, folder)
-
-
-def _describe(ref) -> str:
-    from armlab.protocols.joint_1dof.diagnosis.referee import describe
-
-    return describe(ref)
-
-
-def _referee() -> Referee:
-    from armlab.protocols.joint_1dof.diagnosis.referee import JOINT_CLASSES
-
-    return Referee(classes=JOINT_CLASSES, make_dataset=_make_dataset, describe=_describe)
-
-
-def _candidates() -> tuple[str, ...]:
-    from armlab.protocols.joint_1dof.diagnosis.models import JOINT_SURROGATES
-
-    return tuple(JOINT_SURROGATES)
 
 
 PROTOCOL = Protocol(
@@ -81,16 +30,7 @@ PROTOCOL = Protocol(
         "payload_mass",
         "cocontraction_variation",
     ),
-    diagnosis=DiagnosisHooks(
-        load=_load,
-        diagnose=_diagnose,
-        candidates=_candidates(),
-        rules=RULES,
-        report=_report,
-        figures=_figures,
-        recording=_recording,
-        referee=_referee(),
-    ),
+    diagnosis=HOOKS,
     examples=(
         "diagnose data=../shared/data/reklab_ankle protocol=joint_1dof diagnosis.per_trial=true",
         "diagnose-benchmark referee.protocol=joint_1dof referee.replicates=10",

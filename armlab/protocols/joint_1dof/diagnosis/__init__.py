@@ -1,0 +1,27 @@
+"""The sim-to-real diagnosis of ``joint_1dof``: the nominal joint I s² + B s + K.
+
+Data (:mod:`.data`), its surrogate family (:mod:`.models`), the diagnosis (:mod:`.diagnose`), its
+referee on the MuJoCo joint rig (:mod:`.referee`), its report (:mod:`.report`) and acceptance
+rules (:mod:`.rules`); :data:`HOOKS` is what the protocol declares.
+"""
+
+from armlab.data.joint_import import load_joint_data
+from armlab.protocols.base import DiagnosisHooks, Referee
+from armlab.protocols.joint_1dof.diagnosis.diagnose import diagnose_joint
+from armlab.protocols.joint_1dof.diagnosis.models import JOINT_SURROGATES
+from armlab.protocols.joint_1dof.diagnosis.referee import JOINT_CLASSES, describe, make_dataset
+from armlab.protocols.joint_1dof.diagnosis.report import format_report
+from armlab.protocols.joint_1dof.diagnosis.rules import RULES
+
+__all__ = ["HOOKS"]
+
+HOOKS = DiagnosisHooks(
+    load=lambda path, cfg: load_joint_data(path, min_duration_s=cfg.min_duration_s),
+    diagnose=diagnose_joint,
+    candidates=tuple(JOINT_SURROGATES),
+    rules=RULES,
+    report=format_report,
+    figures=lambda viz, series, results, out: viz.diagnosis_figures(series, results, out),
+    recording=lambda viz, series, path: viz.diagnosis_recording(series, path),
+    referee=Referee(classes=JOINT_CLASSES, make_dataset=make_dataset, describe=describe),
+)
