@@ -16,6 +16,7 @@ from armlab.errors import ConfigError, DataError
 from armlab.models.spring_array import TABLE_I_PAYLOADS_KG, TABLE_I_STIFFNESS
 from armlab.protocols.virtual_force_sensor.results import PAPER_TABLE_III
 from armlab.reproduction import vfs as pv
+from armlab.reproduction.variants import variant
 
 
 def _row(label, param, truth, m1, m2):
@@ -100,8 +101,11 @@ def test_variants_change_one_setting_and_unknown_names_list_the_valid_ones():
     assert doubled.capstan.drag_stiffness_N_per_m == 2 * cfg.capstan.drag_stiffness_N_per_m
     assert doubled.capstan.cable == cfg.capstan.cable and doubled.vfs == cfg.vfs
     assert by_name["robot_table_vi"].apply(cfg).vfs.robot_model == "table_vi"
+    # the change reads as the single-change variants always did
+    assert by_name["drag_off"].change == "capstan.drag=False"
+    assert by_name["drag_x2"].change == "capstan.drag_stiffness_N_per_m x2"
     with pytest.raises(ConfigError, match="valid: \\['compliant'|choose one of"):
-        pv.Variant("bad", "no such cable", "capstan", "cable", "rope").apply(cfg)
+        variant("bad", "cable", "no such cable", [("capstan.cable", "rope")]).apply(cfg)
     with pytest.raises(ConfigError, match="drag_off"):
         pv.diagnose_pattern(cfg, ["cabling_drag"], quick=True)
 

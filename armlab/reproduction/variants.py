@@ -23,6 +23,7 @@ __all__ = [
     "STRETCH_LATENCIES_S",
     "Variant",
     "candidate_variants",
+    "variant",
 ]
 
 # s, short-latency stretch reflex 25-50 ms (conditioning paper II-B); the nominal is 35 ms
@@ -37,14 +38,23 @@ LOWPASS_ALT_HZ = 40.0  # Hz, the alternative cutoff named in EstimatorConfig (pa
 class Variant:
     """One named change of the config: ``set_values`` assigned, then ``scale`` factors applied.
 
-    Paths are ``"<group>.<field>"`` of :class:`ExperimentConfig` (e.g. ``"reflex.enabled"``).
+    Paths are ``"<group>.<field>"`` of the protocol's experiment (e.g. ``"reflex.enabled"``); both
+    published studies (conditioning thresholds, the virtual-force-sensor Table III pattern) use it.
     """
 
     name: str
-    effect: str  # the effect family: reflex, cuff, sensors, muscle, cocontraction, filter
+    effect: str  # the effect family: reflex, cuff, sensors, muscle, cocontraction, filter, drag, ...
     description: str
     set_values: tuple[tuple[str, object], ...] = ()
     scale: tuple[tuple[str, float], ...] = ()
+
+    @property
+    def change(self) -> str:
+        """The change in words: ``group.field=value`` and ``group.field xfactor``, comma-joined."""
+        return ", ".join(
+            [f"{path}={value}" for path, value in self.set_values]
+            + [f"{path} x{factor:g}" for path, factor in self.scale]
+        )
 
     def apply(self, cfg: ExperimentConfig) -> ExperimentConfig:
         """The varied config (each group's ``__post_init__`` validates the new values)."""
@@ -76,7 +86,8 @@ def _with(cfg: ExperimentConfig, path: str, value) -> ExperimentConfig:
     return replace(cfg, **{group: replace(getattr(cfg, group), **{name: value})})
 
 
-def _v(name: str, effect: str, description: str, sets=(), scale=()) -> Variant:
+def variant(name: str, effect: str, description: str, sets=(), scale=()) -> Variant:
+    """A :class:`Variant` from lists of ``(path, value)`` sets and ``(path, factor)`` scales."""
     return Variant(
         name=name, effect=effect, description=description, set_values=tuple(sets), scale=tuple(scale)
     )
@@ -90,15 +101,15 @@ def candidate_variants(cfg: ExperimentConfig) -> list[Variant]:
     gains = [(f"reflex.{g}_gain", REFLEX_GAIN_FACTOR) for g in ("stretch", "velocity", "spinal")]
     reflex_on = [("reflex.enabled", True)]
     return [
-        _v(
+        variant(
             f"reflex_{'off' if on else 'on'}",
             "reflex",
             f"reflexes {'off' if on else 'on'}",
             [("reflex.enabled", not on)],
         ),
-        _v("reflex_gain_x2", "reflex", "every reflex gain x2 (reflex on)", reflex_on, gains),
+        variant("reflex_gain_x2", "reflex", "every reflex gain x2 (reflex on)", reflex_on, gains),
         *(
-            _v(
+            variant(
                 f"reflex_latency_{t * 1e3:.0f}ms",
                 "reflex",
                 f"stretch-reflex latency {t * 1e3:.0f} ms (reflex on)",
@@ -106,14 +117,14 @@ def candidate_variants(cfg: ExperimentConfig) -> list[Variant]:
             )
             for t in STRETCH_LATENCIES_S
         ),
-        _v(
+        variant(
             f"cuff_{'compliant' if rigid else 'rigid'}",
             "cuff",
             f"{'compliant' if rigid else 'rigid'} cuff",
             [("cuff.rigid", not rigid)],
         ),
         *(
-            _v(
+            variant(
                 f"cuff_stiffness_x{f:g}",
                 "cuff",
                 f"compliant cuff, {k_cuff * f:.0f} N/m",
@@ -122,10 +133,10 @@ def candidate_variants(cfg: ExperimentConfig) -> list[Variant]:
             )
             for f in CUFF_STIFFNESS_FACTORS
         ),
-        _v(f"sensors_{sensors}", "sensors", f"{sensors} sensors", [("sensors.preset", sensors)]),
-        _v(f"muscle_{muscle}", "muscle", f"{muscle} muscles", [("arm.muscle", muscle)]),
+        variant(f"sensors_{sensors}", "sensors", f"{sensors} sensors", [("sensors.preset", sensors)]),
+        variant(f"muscle_{muscle}", "muscle", f"{muscle} muscles", [("arm.muscle", muscle)]),
         *(
-            _v(
+            variant(
                 f"cocontraction_x{f:g}",
                 "cocontraction",
                 f"co-contraction {cfg.arm.cocontraction * f:g}",
@@ -133,7 +144,7 @@ def candidate_variants(cfg: ExperimentConfig) -> list[Variant]:
             )
             for f in COCONTRACTION_FACTORS
         ),
-        _v(
+        variant(
             f"lowpass_{LOWPASS_ALT_HZ:g}hz",
             "filter",
             f"low-pass {LOWPASS_ALT_HZ:g} Hz (same recording)",

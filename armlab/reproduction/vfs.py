@@ -16,7 +16,7 @@ paper. Only :func:`run_published_vfs` writes files.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -29,13 +29,13 @@ from armlab.protocols.virtual_force_sensor import PROTOCOL, VirtualForceSensorCo
 from armlab.protocols.virtual_force_sensor.experiment import simulate_vfs
 from armlab.protocols.virtual_force_sensor.results import METHODS, PAPER_TABLE_III, estimate_vfs
 from armlab.reproduction._vfs_text import format_report
+from armlab.reproduction.variants import variant
 
 __all__ = [
     "PROTOCOL_NAME",
     "DIFF_FEATURES",
     "FEATURES",
     "VARIANTS",
-    "Variant",
     "diagnose_pattern",
     "format_report",
     "paper_table",
@@ -74,42 +74,38 @@ _QUICK = {  # tests: 2 arrays x 2 payloads, 12 s trials (9 s least squares, 3 s 
 }
 
 
-@dataclass(frozen=True)
-class Variant:
-    """One candidate effect: ``<group>.<field>`` set to ``value``, or scaled by ``factor``."""
-
-    name: str
-    description: str
-    group: str  # "capstan" | "vfs" | "sensors" (armlab/config/capstan.py, config/schema.py)
-    field: str
-    value: object = None
-    factor: float | None = None
-
-    @property
-    def change(self) -> str:
-        return f"{self.group}.{self.field}" + (f" x{self.factor:g}" if self.factor else f"={self.value}")
-
-    def apply(self, cfg: VirtualForceSensorConfig) -> VirtualForceSensorConfig:
-        """The config with this effect changed (the group's ``__post_init__`` checks rerun)."""
-        sub = getattr(cfg, self.group)
-        new = getattr(sub, self.field) * self.factor if self.factor else self.value
-        return replace(cfg, **{self.group: replace(sub, **{self.field: new})})
-
-
+#: single-effect variants of the lab (armlab/config/capstan.py, config/schema.py)
 VARIANTS = (
-    Variant(
-        "drag_off", "no cabling drag (Sec. IV-A: F/T and accelerometer cables)", "capstan", "drag", False
+    variant(
+        "drag_off",
+        "drag",
+        "no cabling drag (Sec. IV-A: F/T and accelerometer cables)",
+        [("capstan.drag", False)],
     ),
-    Variant("drag_x2", "cabling drag stiffness x2", "capstan", "drag_stiffness_N_per_m", factor=2.0),
-    Variant("cable_rigid", "rigid capstan cables (no drive compliance)", "capstan", "cable", "rigid"),
-    Variant(
-        "cable_soft", "capstan cables half as stiff", "capstan", "cable_stiffness_Nm_per_rad", factor=0.5
+    variant("drag_x2", "drag", "cabling drag stiffness x2", scale=[("capstan.drag_stiffness_N_per_m", 2.0)]),
+    variant(
+        "cable_rigid", "cable", "rigid capstan cables (no drive compliance)", [("capstan.cable", "rigid")]
     ),
-    Variant("coulomb_off", "no Coulomb friction", "capstan", "coulomb_Nm", 0.0),
-    Variant("coulomb_x3", "Coulomb friction x3", "capstan", "coulomb_Nm", factor=3.0),
-    Variant("robot_table_vi", "Method 1 uses Table VI's alphas", "vfs", "robot_model", "table_vi"),
-    Variant("id_with_drag", "robot identified with the cabling attached", "vfs", "id_drag", True),
-    Variant("sensors_ideal", "no sensor noise, bias or bandwidth at all", "sensors", "preset", "ideal"),
+    variant(
+        "cable_soft",
+        "cable",
+        "capstan cables half as stiff",
+        scale=[("capstan.cable_stiffness_Nm_per_rad", 0.5)],
+    ),
+    variant("coulomb_off", "friction", "no Coulomb friction", [("capstan.coulomb_Nm", 0.0)]),
+    variant("coulomb_x3", "friction", "Coulomb friction x3", scale=[("capstan.coulomb_Nm", 3.0)]),
+    variant(
+        "robot_table_vi", "robot model", "Method 1 uses Table VI's alphas", [("vfs.robot_model", "table_vi")]
+    ),
+    variant(
+        "id_with_drag",
+        "identification",
+        "robot identified with the cabling attached",
+        [("vfs.id_drag", True)],
+    ),
+    variant(
+        "sensors_ideal", "sensors", "no sensor noise, bias or bandwidth at all", [("sensors.preset", "ideal")]
+    ),
 )
 
 

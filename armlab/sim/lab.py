@@ -36,8 +36,8 @@ __all__ = [
 ]
 
 PATH_POINTS = 41  # IK points along each direction's hand path (spline-interpolated in between)
-#: Catalogue effects (configs/effects/) this laboratory applies; the reflex and the cuff
-#: compliance are its own ``reflex.*`` and ``cuff.*`` settings.
+#: Catalogue effects (``effects=[...]``) this laboratory applies; the reflex and the cuff
+#: compliance are part of the lab, switched by its own ``reflex.enabled`` and ``cuff.rigid``.
 LAB_EFFECTS = ("joint_friction", "force_sensor_bandwidth", "channel_delay", "force_sensor_noise")
 
 

@@ -14,7 +14,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from armlab.config.schema import EstimatorConfig, ExperimentConfig
+from armlab.config.schema import EstimatorConfig
 from armlab.data.trial import TrialSet
 from armlab.errors import ConfigError, DataError
 from armlab.estimation import criteria
@@ -23,6 +23,7 @@ from armlab.estimation.processing import JointSignals, ProcessingConfig, joint_s
 from armlab.models.ground_truth import GroundTruth
 from armlab.models.scene import MUSCLES, Scene
 from armlab.perturbations.scenario import Scenario, draw_trials, load_scenario
+from armlab.protocols.conditioning_window.config import ConditioningWindowConfig
 from armlab.sim.hold import HoldState
 from armlab.sim.lab import record_trials
 
@@ -96,7 +97,7 @@ class ConditioningRecording:
     hold: HoldState
 
 
-def simulate_protocol(cfg: ExperimentConfig) -> tuple[ConditioningRecording, Scenario]:
+def simulate_protocol(cfg: ConditioningWindowConfig) -> tuple[ConditioningRecording, Scenario]:
     """Draw the seeded trial plan and record every trial in the simulated lab."""
     scenario = load_scenario(cfg.scenario.name).subset(cfg.scenario.k_values, cfg.scenario.n_trials)
     plan_rng, sensor_rng = np.random.default_rng(cfg.seed).spawn(2)
@@ -263,7 +264,7 @@ def estimate_protocol(
     return results, series
 
 
-def linearisation_bias(cfg: ExperimentConfig) -> dict:
+def linearisation_bias(cfg: ConditioningWindowConfig) -> dict:
     """Error of the linear model of Eq. (9) on exact data from the configured muscle model.
 
     The run's arm (muscle variant, co-contraction, pre-load) and trial plan are simulated again

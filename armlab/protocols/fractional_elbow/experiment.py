@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from armlab.config.schema import ExperimentConfig, FrfConfig
+from armlab.config.schema import FrfConfig
 from armlab.data.trial import TrialSet
 from armlab.errors import ConfigError, DataError, EstimationError
 from armlab.estimation.criteria import relative_error
@@ -40,6 +40,7 @@ from armlab.models.tf_structures import (
     five_element_from_tf,
 )
 from armlab.perturbations.multisine import ForceScenario, load_force_scenario, multisine
+from armlab.protocols.fractional_elbow.config import FractionalElbowConfig
 from armlab.sensors.channel import ChannelSpec
 from armlab.sensors.presets import DD_ENCODER, JR3_FORCE
 from armlab.sim.force_control import simulate_force_trial
@@ -78,7 +79,7 @@ class FractionalRecording:
     scene: DirectDriveScene
 
 
-def simulate_fractional(cfg: ExperimentConfig) -> FractionalRecording:
+def simulate_fractional(cfg: FractionalElbowConfig) -> FractionalRecording:
     """Simulate every trial of the protocol (``cfg.scenario.n_trials`` of them, or the scenario's)."""
     scenario = load_force_scenario(cfg.scenario.name, cfg.scenario.n_trials)
     if abs(cfg.sensors.fs_hz - scenario.fs_hz) > 1e-9:

@@ -20,13 +20,13 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from armlab.config.schema import ExperimentConfig
 from armlab.data.trial import TrialSet
 from armlab.models.arm_endpoint import endpoint_truth, relaxed_activation
 from armlab.models.capstan_robot import TABLE_VI_ALPHA
 from armlab.models.capstan_scene import CapstanScene, build_capstan_scene
 from armlab.models.spring_array import TABLE_I_PAYLOADS_KG, TABLE_I_STIFFNESS, table_i_array
 from armlab.perturbations.sum_of_sines import sum_of_sines
+from armlab.protocols.virtual_force_sensor.config import VirtualForceSensorConfig
 from armlab.sensors.presets import CapstanSensorSuite, measure
 from armlab.sim.capstan_lab import CLEAN_UNITS, simulate_capstan
 
@@ -62,12 +62,12 @@ class VfsRecording:
     scenes: dict[str, str]
 
 
-def _suite(cfg: ExperimentConfig) -> CapstanSensorSuite:
+def _suite(cfg: VirtualForceSensorConfig) -> CapstanSensorSuite:
     return CapstanSensorSuite.ideal() if cfg.sensors.preset == "ideal" else CapstanSensorSuite.realistic()
 
 
 def _stage(
-    cfg: ExperimentConfig,
+    cfg: VirtualForceSensorConfig,
     scene: CapstanScene,
     theta0: np.ndarray,
     n_trials: int,
@@ -101,13 +101,13 @@ def _stage(
     return {**measured, **{k: clean[k] for k in _SAVED_TRUTH}}
 
 
-def _scene(cfg: ExperimentConfig, load: str, **kw) -> CapstanScene:
+def _scene(cfg: VirtualForceSensorConfig, load: str, **kw) -> CapstanScene:
     return build_capstan_scene(
         cfg.capstan, load, timestep_s=cfg.sim.timestep_s, integrator=cfg.sim.integrator, **kw
     )
 
 
-def simulate_vfs(cfg: ExperimentConfig) -> VfsRecording:
+def simulate_vfs(cfg: VirtualForceSensorConfig) -> VfsRecording:
     """Simulate every stage of the protocol (module docstring) with the config's sensors and seed."""
     v = cfg.vfs
     rng = np.random.default_rng(cfg.seed)
