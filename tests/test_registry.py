@@ -142,3 +142,20 @@ def test_readme_protocol_table_matches_the_registry():
     readme = (ARMLAB.parent / "README.md").read_text(encoding="utf-8")
     table = [line.split("|")[1].strip().strip("`") for line in readme.splitlines() if line.startswith("| `")]
     assert table == registry.names()
+
+
+def test_referee_settings_of_another_protocol_are_refused(capsys, tmp_path):
+    args = ["diagnose-benchmark", "referee.protocol=conditioning_window", "referee.noise_std_Nm=0.3"]
+    assert main([*args, f"out={tmp_path / 'b'}"]) == 2
+    err = capsys.readouterr().err
+    assert "['referee.noise_std_Nm=0.3']: not read by the conditioning_window referee" in err
+    assert "'referee.force_noise_N'" in err and not (tmp_path / "b").exists()
+    from dataclasses import fields
+
+    from armlab.config.diagnosis import RefereeConfig
+
+    declared = {"protocol", "replicates", "seed", "classes", "jobs"}
+    for p in registry.protocols():
+        if p.diagnosis is not None and p.diagnosis.referee is not None:
+            declared |= set(p.diagnosis.referee.settings)
+    assert declared == {f.name for f in fields(RefereeConfig)}  # every field is someone's

@@ -73,11 +73,15 @@ class Referee:
             files into ``folder`` (:class:`armlab.diagnosis.scoring.Dataset`).
         describe: ``(RefereeConfig) -> str``: its datasets in words (trials, rate, noise), for
             ``benchmark.md``.
+        settings: the protocol-specific ``RefereeConfig`` fields it reads (beside the shared
+            ``protocol``, ``replicates``, ``seed``, ``classes``, ``jobs``); an override of another
+            protocol's field is refused, never ignored.
     """
 
     classes: Mapping[str, tuple[tuple[str, ...], tuple[str, ...]]]
     make_dataset: Callable[[str, int, RefereeConfig, DiagnosisConfig, Path], Any]
     describe: Callable[[RefereeConfig], str]
+    settings: tuple[str, ...] = ()
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)

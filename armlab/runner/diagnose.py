@@ -102,7 +102,17 @@ def run_benchmark(overrides: list[str] | None, out_dir: Path) -> tuple[Path, dic
     if ref.protocol is None:
         ref = replace(ref, protocol=registry.DEFAULT_REFEREE)
     diag_cfg = apply_overrides(DiagnosisConfig(), "diagnosis", diag_items)
-    all_classes = registry.get(ref.protocol, need="referee").diagnosis.referee.classes
+    referee = registry.get(ref.protocol, need="referee").diagnosis.referee
+    shared = ("protocol", "replicates", "seed", "classes", "jobs")
+    foreign = [
+        o for o in ref_items if o.partition("=")[0].split(".", 1)[1] not in (*shared, *referee.settings)
+    ]
+    if foreign:
+        raise ConfigError(
+            f"{foreign}: not read by the {ref.protocol} referee; it reads "
+            f"{[f'referee.{n}' for n in (*shared, *referee.settings)]}"
+        )
+    all_classes = referee.classes
     classes = list(ref.classes) if ref.classes is not None else list(all_classes)
     unknown = [c for c in classes if c not in all_classes]
     if unknown:

@@ -23,5 +23,10 @@ HOOKS = DiagnosisHooks(
     report=format_cond_report,
     figures=lambda viz, series, results, out: viz.cond_diagnosis_figures(series, results, out),
     recording=lambda viz, series, path: viz.cond_diagnosis_recording(series, path),
-    referee=Referee(classes=COND_CLASSES, make_dataset=make_cond_dataset, describe=describe),
+    referee=Referee(
+        classes=COND_CLASSES,
+        make_dataset=make_cond_dataset,
+        describe=describe,
+        settings=("cond_trials", "cond_windows", "force_noise_N"),
+    ),
 )

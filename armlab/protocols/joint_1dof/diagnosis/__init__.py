@@ -23,5 +23,10 @@ HOOKS = DiagnosisHooks(
     report=format_report,
     figures=lambda viz, series, results, out: viz.diagnosis_figures(series, results, out),
     recording=lambda viz, series, path: viz.diagnosis_recording(series, path),
-    referee=Referee(classes=JOINT_CLASSES, make_dataset=make_dataset, describe=describe),
+    referee=Referee(
+        classes=JOINT_CLASSES,
+        make_dataset=make_dataset,
+        describe=describe,
+        settings=("n_trials", "trial_s", "fs_hz", "noise_std_Nm"),
+    ),
 )
