@@ -18,6 +18,7 @@ from pathlib import Path
 
 from armlab.config.diagnosis import DiagnosisConfig, RefereeConfig
 from armlab.data.reklab import DEFAULT_REKLAB_ROOT
+from armlab.diagnosis.attribution import select_candidates
 from armlab.protocols.conditioning_window.diagnosis.models import COND_SURROGATES
 from armlab.protocols.conditioning_window.diagnosis.referee import make_cond_dataset
 from armlab.protocols.joint_1dof.diagnosis.diagnose import candidate_names
@@ -50,7 +51,7 @@ def main() -> None:
             f"{wall:.1f} s (target < {TARGET_S:.0f} s) verdict {res['verdict']}"
         )
     ref = RefereeConfig(protocol="conditioning_window")
-    n_cond = len(candidate_names(cfg, COND_SURROGATES, "conditioning_window"))
+    n_cond = len(select_candidates(cfg, COND_SURROGATES, "conditioning_window"))
     with tempfile.TemporaryDirectory() as tmp:
         ds = make_cond_dataset("reflex+cuff_compliance", 0, ref, cfg, Path(tmp) / "trials")
         wall, res = _time(ds.folder / "trials.h5", cfg, "conditioning_window")
