@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, field
 
-from armlab.errors import ConfigError
+from armlab.config.validate import check, choice
 
 __all__ = [
     "CABLE_MODES",
@@ -26,15 +26,10 @@ STIFFNESS_LABELS = ("K1", "K2", "K3", "K4", "K5")  # Table I
 PAYLOAD_LABELS = ("M1", "M2", "M3", "M4", "M5")  # Table I
 
 
-def _check(cond: bool, msg: str) -> None:
-    if not cond:
-        raise ConfigError(msg)
-
-
 def _positive(group: str, obj, *names: str) -> None:
     for name in names:
         value = getattr(obj, name)
-        _check(
+        check(
             isinstance(value, (int, float)) and math.isfinite(value) and value > 0,
             f"{group}.{name} must be a finite number > 0, got {value!r}",
         )
@@ -75,11 +70,8 @@ class CapstanConfig:
     handle_mass_kg: float = 0.135  # kg, Lambda of Eq. (9), paper Sec. II-C
 
     def __post_init__(self) -> None:
-        _check(self.model == "capstan_planar", f"capstan.model={self.model!r}; valid: ['capstan_planar']")
-        _check(
-            self.cable in CABLE_MODES,
-            f"capstan.cable={self.cable!r} is not valid; choose one of {list(CABLE_MODES)}",
-        )
+        check(self.model == "capstan_planar", f"capstan.model={self.model!r}; valid: ['capstan_planar']")
+        choice("capstan.cable", self.cable, CABLE_MODES)
         _positive(
             "capstan",
             self,
@@ -91,8 +83,8 @@ class CapstanConfig:
         )
         for name in ("cable_damping_Nms_per_rad", "kd_Nms_per_rad", "coulomb_Nm"):
             value = getattr(self, name)
-            _check(math.isfinite(value) and value >= 0, f"capstan.{name} must be >= 0, got {value!r}")
-        _check(
+            check(math.isfinite(value) and value >= 0, f"capstan.{name} must be >= 0, got {value!r}")
+        check(
             len(self.drag_anchor_m) == 2, f"capstan.drag_anchor_m must be (x, y) m, got {self.drag_anchor_m}"
         )
 
@@ -137,38 +129,33 @@ class VfsConfig:
 
     def __post_init__(self) -> None:
         bad = [s for s in self.stiffness if s not in STIFFNESS_LABELS]
-        _check(not bad, f"vfs.stiffness has unknown labels {bad}; valid: {list(STIFFNESS_LABELS)}")
+        check(not bad, f"vfs.stiffness has unknown labels {bad}; valid: {list(STIFFNESS_LABELS)}")
         bad = [p for p in self.payloads if p not in PAYLOAD_LABELS]
-        _check(not bad, f"vfs.payloads has unknown labels {bad}; valid: {list(PAYLOAD_LABELS)}")
+        check(not bad, f"vfs.payloads has unknown labels {bad}; valid: {list(PAYLOAD_LABELS)}")
         for name in ("trials_per_config", "arm_trials", "robot_id_trials"):
             value = getattr(self, name)
-            _check(
-                isinstance(value, int) and value >= 0, f"vfs.{name} must be an integer >= 0, got {value!r}"
-            )
-        _check(
+            check(isinstance(value, int) and value >= 0, f"vfs.{name} must be an integer >= 0, got {value!r}")
+        check(
             self.robot_id_trials >= 1 or self.robot_model != "identified",
             "vfs.robot_id_trials must be >= 1 when vfs.robot_model='identified'",
         )
         _positive(
             "vfs", self, "trial_s", "id_s", "val_s", "range_deg", "id_range_deg", "lowpass_hz", "arm_reach_m"
         )
-        _check(self.settle_s >= 0, f"vfs.settle_s must be >= 0 s, got {self.settle_s}")
-        _check(
+        check(self.settle_s >= 0, f"vfs.settle_s must be >= 0 s, got {self.settle_s}")
+        check(
             self.id_s <= self.trial_s and self.val_s <= self.trial_s,
             f"vfs.id_s ({self.id_s} s) and vfs.val_s ({self.val_s} s) must fit in "
             f"vfs.trial_s ({self.trial_s} s)",
         )
-        _check(self.n_sines >= 1, f"vfs.n_sines must be >= 1, got {self.n_sines}")
+        check(self.n_sines >= 1, f"vfs.n_sines must be >= 1, got {self.n_sines}")
         for name in ("band_hz", "id_band_hz"):
             lo, hi = getattr(self, name)
-            _check(0 < lo <= hi, f"vfs.{name} must be (low, high) Hz with 0 < low <= high, got {(lo, hi)}")
-        _check(
+            check(0 < lo <= hi, f"vfs.{name} must be (low, high) Hz with 0 < low <= high, got {(lo, hi)}")
+        check(
             self.sg_window % 2 == 1 and self.sg_window > self.sg_order >= 1,
             f"vfs.sg_window must be odd and longer than vfs.sg_order (a Savitzky-Golay window of "
             f"{self.sg_window} samples cannot fit a polynomial of order {self.sg_order})",
         )
-        _check(self.lowpass_order >= 1, f"vfs.lowpass_order must be >= 1, got {self.lowpass_order}")
-        _check(
-            self.robot_model in ROBOT_MODELS,
-            f"vfs.robot_model={self.robot_model!r} is not valid; choose one of {list(ROBOT_MODELS)}",
-        )
+        check(self.lowpass_order >= 1, f"vfs.lowpass_order must be >= 1, got {self.lowpass_order}")
+        choice("vfs.robot_model", self.robot_model, ROBOT_MODELS)

@@ -14,6 +14,7 @@ import numpy as np
 
 from armlab.config.capstan import CapstanConfig, VfsConfig
 from armlab.config.effects import EffectsConfig
+from armlab.config.validate import check, choice
 from armlab.errors import ConfigError
 
 __all__ = [
@@ -42,15 +43,6 @@ XI_SOURCES = ("truth", "paper")
 ELBOW_IMPEDANCES = ("muscle", "five_element", "fractional")
 
 
-def _check(cond: bool, msg: str) -> None:
-    if not cond:
-        raise ConfigError(msg)
-
-
-def _choice(name: str, value: str, valid: tuple[str, ...]) -> None:
-    _check(value in valid, f"{name}={value!r} is not valid; choose one of {list(valid)}")
-
-
 @dataclass(kw_only=True)
 class ArmConfig:
     """The human arm model and the subject's posture and effort."""
@@ -63,16 +55,14 @@ class ArmConfig:
     shoulder_pos_m: tuple[float, float, float] = (0.0, 0.0, 0.9)  # m, shoulder in world (seated)
 
     def __post_init__(self) -> None:
-        _choice("arm.model", self.model, ("arm_planar",))
-        _choice("arm.muscle", self.muscle, MUSCLE_VARIANTS)
-        _check(
+        choice("arm.model", self.model, ("arm_planar",))
+        choice("arm.muscle", self.muscle, MUSCLE_VARIANTS)
+        check(
             0.0 < self.cocontraction < 1.0, f"arm.cocontraction must lie in (0, 1), got {self.cocontraction}"
         )
-        _check(0.0 <= self.preload_N <= 50.0, f"arm.preload_N must lie in [0, 50] N, got {self.preload_N}")
-        _check(0.0 < self.q0[1] < 2.6, f"arm.q0 elbow angle must lie in (0, 2.6) rad, got {self.q0[1]}")
-        _check(
-            -0.7 < self.q0[0] < 2.3, f"arm.q0 shoulder angle must lie in (-0.7, 2.3) rad, got {self.q0[0]}"
-        )
+        check(0.0 <= self.preload_N <= 50.0, f"arm.preload_N must lie in [0, 50] N, got {self.preload_N}")
+        check(0.0 < self.q0[1] < 2.6, f"arm.q0 elbow angle must lie in (0, 2.6) rad, got {self.q0[1]}")
+        check(-0.7 < self.q0[0] < 2.3, f"arm.q0 shoulder angle must lie in (-0.7, 2.3) rad, got {self.q0[0]}")
 
 
 @dataclass(kw_only=True)
@@ -97,15 +87,15 @@ class ReflexConfig:
     def __post_init__(self) -> None:
         for name in ("stretch_latency_s", "spinal_latency_s"):
             value = getattr(self, name)
-            _check(value > 0, f"reflex.{name} must be positive (s), got {value}")
-        _check(
+            check(value > 0, f"reflex.{name} must be positive (s), got {value}")
+        check(
             self.stretch_latency_s <= self.spinal_latency_s,
             f"reflex.stretch_latency_s ({self.stretch_latency_s}) must not exceed "
             f"reflex.spinal_latency_s ({self.spinal_latency_s})",
         )
         for name in ("stretch_gain", "velocity_gain", "spinal_gain"):
             value = getattr(self, name)
-            _check(value >= 0, f"reflex.{name} must be >= 0, got {value}")
+            check(value >= 0, f"reflex.{name} must be >= 0, got {value}")
 
 
 @dataclass(kw_only=True)
@@ -120,11 +110,9 @@ class CuffConfig:
     mass_kg: float = 0.6  # kg, plastic cuff + metal support beam (assumption, paper IV-A)
 
     def __post_init__(self) -> None:
-        _check(
-            self.stiffness_N_per_m > 0, f"cuff.stiffness_N_per_m must be > 0, got {self.stiffness_N_per_m}"
-        )
-        _check(self.damping_Ns_per_m >= 0, f"cuff.damping_Ns_per_m must be >= 0, got {self.damping_Ns_per_m}")
-        _check(self.mass_kg > 0, f"cuff.mass_kg must be > 0, got {self.mass_kg}")
+        check(self.stiffness_N_per_m > 0, f"cuff.stiffness_N_per_m must be > 0, got {self.stiffness_N_per_m}")
+        check(self.damping_Ns_per_m >= 0, f"cuff.damping_Ns_per_m must be >= 0, got {self.damping_Ns_per_m}")
+        check(self.mass_kg > 0, f"cuff.mass_kg must be > 0, got {self.mass_kg}")
 
 
 @dataclass(kw_only=True)
@@ -137,7 +125,7 @@ class RobotConfig:
     base_pos_m: tuple[float, float, float] = (0.55, 0.75, 0.55)
 
     def __post_init__(self) -> None:
-        _choice("robot.model", self.model, ("lwr",))
+        choice("robot.model", self.model, ("lwr",))
 
 
 @dataclass(kw_only=True)
@@ -153,11 +141,9 @@ class SimConfig:
     settle_s: float = 1.0  # s, settling of the pre-loaded hold before the trials start
 
     def __post_init__(self) -> None:
-        _choice("sim.integrator", self.integrator, ("RK4", "implicitfast", "Euler", "implicit"))
-        _check(
-            0 < self.timestep_s <= 0.001, f"sim.timestep_s must lie in (0, 0.001] s, got {self.timestep_s}"
-        )
-        _check(self.settle_s >= 0.2, f"sim.settle_s must be >= 0.2 s, got {self.settle_s}")
+        choice("sim.integrator", self.integrator, ("RK4", "implicitfast", "Euler", "implicit"))
+        check(0 < self.timestep_s <= 0.001, f"sim.timestep_s must lie in (0, 0.001] s, got {self.timestep_s}")
+        check(self.settle_s >= 0.2, f"sim.settle_s must be >= 0.2 s, got {self.settle_s}")
 
 
 @dataclass(kw_only=True)
@@ -168,8 +154,8 @@ class SensorsConfig:
     fs_hz: float = 1000.0  # Hz, sampling rate of the recording system (paper IV-A)
 
     def __post_init__(self) -> None:
-        _choice("sensors.preset", self.preset, SENSOR_PRESETS)
-        _check(self.fs_hz > 0, f"sensors.fs_hz must be > 0, got {self.fs_hz}")
+        choice("sensors.preset", self.preset, SENSOR_PRESETS)
+        check(self.fs_hz > 0, f"sensors.fs_hz must be > 0, got {self.fs_hz}")
 
 
 @dataclass(kw_only=True)
@@ -182,7 +168,7 @@ class ScenarioConfig:
 
     def __post_init__(self) -> None:
         if self.n_trials is not None:
-            _check(
+            check(
                 self.n_trials >= 2,
                 f"scenario.n_trials must be >= 2 (identify + validate), got {self.n_trials}",
             )
@@ -205,22 +191,22 @@ class EstimatorConfig:
     t_obs_s: list[float] | None = None  # explicit windows; None = T_k + 70 ms per scenario window
 
     def __post_init__(self) -> None:
-        _choice("estimator.method", self.method, ("joint_ls",))
-        _choice("estimator.xi_source", self.xi_source, XI_SOURCES)
+        choice("estimator.method", self.method, ("joint_ls",))
+        choice("estimator.xi_source", self.xi_source, XI_SOURCES)
         if self.lowpass_hz is not None:
-            _check(self.lowpass_hz > 0, f"estimator.lowpass_hz must be > 0 Hz or null, got {self.lowpass_hz}")
-        _check(self.filter_order >= 1, f"estimator.filter_order must be >= 1, got {self.filter_order}")
-        _check(self.baseline_s > 0, f"estimator.baseline_s must be > 0 s, got {self.baseline_s}")
-        _check(
+            check(self.lowpass_hz > 0, f"estimator.lowpass_hz must be > 0 Hz or null, got {self.lowpass_hz}")
+        check(self.filter_order >= 1, f"estimator.filter_order must be >= 1, got {self.filter_order}")
+        check(self.baseline_s > 0, f"estimator.baseline_s must be > 0 s, got {self.baseline_s}")
+        check(
             0 < self.symmetry_tol < 1, f"estimator.symmetry_tol must lie in (0, 1), got {self.symmetry_tol}"
         )
-        _check(
+        check(
             0 < self.constancy_tol < 1,
             f"estimator.constancy_tol must lie in (0, 1), got {self.constancy_tol}",
         )
         if self.t_obs_s is not None:
             bad = [t for t in self.t_obs_s if not (math.isfinite(t) and t > 0)]
-            _check(not bad, f"estimator.t_obs_s must hold positive times in s, got {bad}")
+            check(not bad, f"estimator.t_obs_s must hold positive times in s, got {bad}")
 
 
 @dataclass(kw_only=True)
@@ -254,27 +240,25 @@ class ElbowConfig:
     oustaloup_order: int = 6  # pole-zero pairs per side, 2N + 1 in all
 
     def __post_init__(self) -> None:
-        _choice("elbow.model", self.model, ("elbow_1dof",))
-        _choice("elbow.impedance", self.impedance, ELBOW_IMPEDANCES)
-        _check(
+        choice("elbow.model", self.model, ("elbow_1dof",))
+        choice("elbow.impedance", self.impedance, ELBOW_IMPEDANCES)
+        check(
             0.0 < self.cocontraction < 1.0,
             f"elbow.cocontraction must lie in (0, 1), got {self.cocontraction}",
         )
         for name in ("grasp_stiffness_N_per_m", "arm_stiffness_Nm_per_rad", "fractional_coeff"):
             value = getattr(self, name)
-            _check(value > 0, f"elbow.{name} must be > 0, got {value}")
+            check(value > 0, f"elbow.{name} must be > 0, got {value}")
         for name in ("grasp_damping_Ns_per_m", "arm_damping_Nms_per_rad"):
             value = getattr(self, name)
-            _check(value >= 0, f"elbow.{name} must be >= 0, got {value}")
-        _check(
+            check(value >= 0, f"elbow.{name} must be >= 0, got {value}")
+        check(
             0.0 < self.fractional_order < 1.0,
             f"elbow.fractional_order must lie in (0, 1) (a springpot), got {self.fractional_order}",
         )
         lo, hi = self.oustaloup_band_hz
-        _check(
-            0 < lo < hi, f"elbow.oustaloup_band_hz must be (low, high) with 0 < low < high, got {(lo, hi)}"
-        )
-        _check(self.oustaloup_order >= 1, f"elbow.oustaloup_order must be >= 1, got {self.oustaloup_order}")
+        check(0 < lo < hi, f"elbow.oustaloup_band_hz must be (low, high) with 0 < low < high, got {(lo, hi)}")
+        check(self.oustaloup_order >= 1, f"elbow.oustaloup_order must be >= 1, got {self.oustaloup_order}")
 
 
 @dataclass(kw_only=True)
@@ -303,26 +287,26 @@ class DirectDriveConfig:
     current_bits: int = 16  # bits of the analog current reference (paper III-A: 16-bit input)
 
     def __post_init__(self) -> None:
-        _choice("motor.model", self.model, ("direct_drive",))
-        _check(
+        choice("motor.model", self.model, ("direct_drive",))
+        check(
             0 < self.safety_range_rad <= 1.0,
             "motor.safety_range_rad must lie in (0, 1.0] rad (mechanical stops at 1.0), "
             f"got {self.safety_range_rad}",
         )
         for name in ("inertia_error", "viscous_error", "coulomb_error"):
             value = getattr(self, name)
-            _check(
+            check(
                 value >= -1.0,
                 f"motor.{name} must be >= -1 (a relative error; -1 drops the term), got {value}",
             )
         for name in ("kp", "ki_per_s", "kd_s", "sign_deadband_rad_s"):
             value = getattr(self, name)
-            _check(value >= 0, f"motor.{name} must be >= 0, got {value}")
-        _check(
+            check(value >= 0, f"motor.{name} must be >= 0, got {value}")
+        check(
             self.derivative_cutoff_hz > 0,
             f"motor.derivative_cutoff_hz must be > 0, got {self.derivative_cutoff_hz}",
         )
-        _check(
+        check(
             8 <= self.current_bits <= 24, f"motor.current_bits must lie in [8, 24], got {self.current_bits}"
         )
 
@@ -353,15 +337,15 @@ class FrfConfig:
     filter_force: bool = False
 
     def __post_init__(self) -> None:
-        _check(
+        check(
             0 < self.fir_pass_hz < self.fir_stop_hz,
             "frf.fir_pass_hz must be > 0 and below frf.fir_stop_hz, "
             f"got {self.fir_pass_hz}, {self.fir_stop_hz}",
         )
-        _check(self.welch_window >= 16, f"frf.welch_window must be >= 16 samples, got {self.welch_window}")
-        _check(0 <= self.welch_overlap < 1, f"frf.welch_overlap must lie in [0, 1), got {self.welch_overlap}")
+        check(self.welch_window >= 16, f"frf.welch_window must be >= 16 samples, got {self.welch_window}")
+        check(0 <= self.welch_overlap < 1, f"frf.welch_overlap must lie in [0, 1), got {self.welch_overlap}")
         lo, hi = self.band_hz
-        _check(0 <= lo < hi, f"frf.band_hz must be (low, high) with 0 <= low < high, got {(lo, hi)}")
+        check(0 <= lo < hi, f"frf.band_hz must be (low, high) with 0 <= low < high, got {(lo, hi)}")
         try:
             alpha_grid(self.alpha_step)
         except ConfigError:
@@ -374,11 +358,11 @@ class FrfConfig:
         """Reject settings the recording cannot support: a band at or beyond Nyquist, a Welch
         window longer than the record."""
         lo, hi = self.band_hz
-        _check(
+        check(
             hi < fs_hz / 2,
             f"frf.band_hz upper edge {hi} Hz is at or beyond Nyquist ({fs_hz / 2} Hz); valid: < {fs_hz / 2}",
         )
-        _check(
+        check(
             self.welch_window <= n_samples,
             f"frf.welch_window = {self.welch_window} samples is longer than the {what} "
             f"({n_samples} samples); valid: <= {n_samples}",
@@ -411,4 +395,4 @@ class ExperimentConfig:
     effects: EffectsConfig = field(default_factory=EffectsConfig)  # the catalogue, all off by default
 
     def __post_init__(self) -> None:
-        _check(self.seed >= 0, f"seed must be a non-negative integer, got {self.seed}")
+        check(self.seed >= 0, f"seed must be a non-negative integer, got {self.seed}")
