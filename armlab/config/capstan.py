@@ -10,8 +10,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, get_args
 
-from armlab.config.validate import check, choice
+from armlab.config import choices
+from armlab.config.validate import check, choice, options
 
 __all__ = [
     "CABLE_MODES",
@@ -20,10 +22,15 @@ __all__ = [
     "VfsConfig",
 ]
 
-CABLE_MODES = ("rigid", "compliant")
-ROBOT_MODELS = ("identified", "table_vi")
-STIFFNESS_LABELS = ("K1", "K2", "K3", "K4", "K5")  # Table I
-PAYLOAD_LABELS = ("M1", "M2", "M3", "M4", "M5")  # Table I
+if TYPE_CHECKING:
+    from armlab.config.choices import CableMode, CapstanModel, PayloadLabel, StiffnessLabel, VfsRobotModel
+else:  # OmegaConf 2.3 rejects Literal field types: it reads these as str, __post_init__ checks them
+    CableMode = CapstanModel = PayloadLabel = StiffnessLabel = VfsRobotModel = str
+
+CABLE_MODES = get_args(choices.CableMode)
+ROBOT_MODELS = get_args(choices.VfsRobotModel)
+STIFFNESS_LABELS = get_args(choices.StiffnessLabel)  # Table I
+PAYLOAD_LABELS = get_args(choices.PayloadLabel)  # Table I
 
 
 def _positive(group: str, obj, *names: str) -> None:
@@ -45,8 +52,8 @@ class CapstanConfig:
     from a point on the base to the end effector, so it acts mostly along x.
     """
 
-    model: str = "capstan_planar"
-    cable: str = "compliant"
+    model: CapstanModel = "capstan_planar"
+    cable: CableMode = "compliant"
     # Link-side capstan cable stiffness, N·m/rad (assumption: static end-effector compliance
     # J J^T / k below 1e-4 m/N, so that the series compliance biases Table I's stiffnesses by
     # < 5 %; the link-on-cable resonance with a payload lies near 15 Hz, which lets the rigid
@@ -70,8 +77,9 @@ class CapstanConfig:
     handle_mass_kg: float = 0.135  # kg, Lambda of Eq. (9), paper Sec. II-C
 
     def __post_init__(self) -> None:
-        check(self.model == "capstan_planar", f"capstan.model={self.model!r}; valid: ['capstan_planar']")
-        choice("capstan.cable", self.cable, CABLE_MODES)
+        models = options(choices.CapstanModel)
+        check(self.model in models, f"capstan.model={self.model!r}; valid: {list(models)}")
+        choice("capstan.cable", self.cable, choices.CableMode)
         _positive(
             "capstan",
             self,
@@ -102,8 +110,8 @@ class VfsConfig:
     ``table_vi`` (the paper's alphas) or ``true`` (the simulated robot's own alphas).
     """
 
-    stiffness: list[str] = field(default_factory=lambda: list(STIFFNESS_LABELS))
-    payloads: list[str] = field(default_factory=lambda: list(PAYLOAD_LABELS))
+    stiffness: list[StiffnessLabel] = field(default_factory=lambda: list(STIFFNESS_LABELS))
+    payloads: list[PayloadLabel] = field(default_factory=lambda: list(PAYLOAD_LABELS))
     trials_per_config: int = 3  # paper Sec. II-C-1: three 50 s trials per configuration
     arm_trials: int = 5  # paper Sec. II-C-2: five trials of the human arm
     robot_id_trials: int = 6  # Appendix: six 50 s trials
@@ -120,7 +128,7 @@ class VfsConfig:
     sg_window: int = 151  # samples at 1 kHz, Sec. III-A
     lowpass_hz: float = 4.5  # Hz, zero-phase 5th-order Butterworth (Sec. III-A)
     lowpass_order: int = 5
-    robot_model: str = "identified"
+    robot_model: VfsRobotModel = "identified"
     id_drag: bool = False
     # human arm: handle at Table V's equilibrium (x_v, y_v) = (383, 15) mm, the shoulder 0.5 m
     # behind it along +x (hand 50 cm anterior to the shoulder, Sec. II-C-2)
@@ -158,4 +166,4 @@ class VfsConfig:
             f"{self.sg_window} samples cannot fit a polynomial of order {self.sg_order})",
         )
         check(self.lowpass_order >= 1, f"vfs.lowpass_order must be >= 1, got {self.lowpass_order}")
-        choice("vfs.robot_model", self.robot_model, ROBOT_MODELS)
+        choice("vfs.robot_model", self.robot_model, choices.VfsRobotModel)

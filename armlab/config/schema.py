@@ -1,7 +1,8 @@
 """Typed configuration of an armlab experiment (the single source of truth for Hydra).
 
 Every group is a ``@dataclass(kw_only=True)`` whose ``__post_init__`` rejects invalid values with
-a message naming the valid range or choices. YAML files under ``configs/`` only set values.
+a message naming the valid range or choices. A choice is a ``Literal`` type of
+:mod:`armlab.config.choices`. YAML files under ``configs/`` only set values.
 Units are in the field names (``_s``, ``_hz``, ``_N``, ...) and sources in the comments.
 """
 
@@ -9,9 +10,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, get_args
 
 import numpy as np
 
+from armlab.config import choices
 from armlab.config.capstan import CapstanConfig, VfsConfig
 from armlab.config.effects import EffectsConfig
 from armlab.config.validate import check, choice
@@ -37,26 +40,43 @@ __all__ = [
     "alpha_grid",
 ]
 
-MUSCLE_VARIANTS = ("hill", "linear")
-SENSOR_PRESETS = ("realistic", "ideal")
-XI_SOURCES = ("truth", "paper")
-ELBOW_IMPEDANCES = ("muscle", "five_element", "fractional")
+if TYPE_CHECKING:
+    from armlab.config.choices import (
+        ArmModel,
+        ElbowImpedance,
+        ElbowModel,
+        EstimatorMethod,
+        Integrator,
+        MotorModel,
+        MuscleModel,
+        RobotModel,
+        SensorPreset,
+        XiSource,
+    )
+else:  # OmegaConf 2.3 rejects Literal field types: it reads these as str, __post_init__ checks them
+    ArmModel = ElbowImpedance = ElbowModel = EstimatorMethod = Integrator = str
+    MotorModel = MuscleModel = RobotModel = SensorPreset = XiSource = str
+
+MUSCLE_VARIANTS = get_args(choices.MuscleModel)
+SENSOR_PRESETS = get_args(choices.SensorPreset)
+XI_SOURCES = get_args(choices.XiSource)
+ELBOW_IMPEDANCES = get_args(choices.ElbowImpedance)
 
 
 @dataclass(kw_only=True)
 class ArmConfig:
     """The human arm model and the subject's posture and effort."""
 
-    model: str = "arm_planar"
-    muscle: str = "hill"  # "hill" (MuJoCo FLV muscle) or "linear" (exact spring-damper)
+    model: ArmModel = "arm_planar"
+    muscle: MuscleModel = "hill"  # "hill" (MuJoCo FLV muscle) or "linear" (exact spring-damper)
     q0: tuple[float, float] = (0.08, 1.00)  # rad, initial configuration, conditioning paper IV-B
     cocontraction: float = 0.2  # activation of every muscle before the pre-load is added
     preload_N: float = 5.0  # N, distal force the subject exerts, conditioning paper IV-B
     shoulder_pos_m: tuple[float, float, float] = (0.0, 0.0, 0.9)  # m, shoulder in world (seated)
 
     def __post_init__(self) -> None:
-        choice("arm.model", self.model, ("arm_planar",))
-        choice("arm.muscle", self.muscle, MUSCLE_VARIANTS)
+        choice("arm.model", self.model, choices.ArmModel)
+        choice("arm.muscle", self.muscle, choices.MuscleModel)
         check(
             0.0 < self.cocontraction < 1.0, f"arm.cocontraction must lie in (0, 1), got {self.cocontraction}"
         )
@@ -119,13 +139,13 @@ class CuffConfig:
 class RobotConfig:
     """The perturbing robot."""
 
-    model: str = "lwr"
+    model: RobotModel = "lwr"
     # m, robot base in the world, in front of and lateral to the subject (assumption: places the
     # hand at q0 well inside the LWR's workspace with the flange pointing down)
     base_pos_m: tuple[float, float, float] = (0.55, 0.75, 0.55)
 
     def __post_init__(self) -> None:
-        choice("robot.model", self.model, ("lwr",))
+        choice("robot.model", self.model, choices.RobotModel)
 
 
 @dataclass(kw_only=True)
@@ -137,11 +157,11 @@ class SimConfig:
     # the estimators fit, with the stiff cuff-hand connect constraint (measured on the rigid
     # linear arm: xi within 0.3 %; implicitfast 0.6 %; RK4 2.6 %, it handles the soft constraint
     # poorly). See the issue note for the timestep study.
-    integrator: str = "Euler"
+    integrator: Integrator = "Euler"
     settle_s: float = 1.0  # s, settling of the pre-loaded hold before the trials start
 
     def __post_init__(self) -> None:
-        choice("sim.integrator", self.integrator, ("RK4", "implicitfast", "Euler", "implicit"))
+        choice("sim.integrator", self.integrator, choices.Integrator)
         check(0 < self.timestep_s <= 0.001, f"sim.timestep_s must lie in (0, 0.001] s, got {self.timestep_s}")
         check(self.settle_s >= 0.2, f"sim.settle_s must be >= 0.2 s, got {self.settle_s}")
 
@@ -150,11 +170,11 @@ class SimConfig:
 class SensorsConfig:
     """Sensor models applied to the clean simulated signals."""
 
-    preset: str = "realistic"  # "realistic" (JR3/LWR-class noise) or "ideal"
+    preset: SensorPreset = "realistic"  # "realistic" (JR3/LWR-class noise) or "ideal"
     fs_hz: float = 1000.0  # Hz, sampling rate of the recording system (paper IV-A)
 
     def __post_init__(self) -> None:
-        choice("sensors.preset", self.preset, SENSOR_PRESETS)
+        choice("sensors.preset", self.preset, choices.SensorPreset)
         check(self.fs_hz > 0, f"sensors.fs_hz must be > 0, got {self.fs_hz}")
 
 
@@ -178,21 +198,21 @@ class ScenarioConfig:
 class EstimatorConfig:
     """Processing and least-squares identification (paper IV-C, III-A, III-C)."""
 
-    method: str = "joint_ls"
+    method: EstimatorMethod = "joint_ls"
     # Hz, phase-free low-pass of q and F before differentiation (paper IV-C gives no cutoff). The
     # same zero-phase filter on both sides keeps the linear fit consistent; 20 Hz keeps K within
     # ~5 % at T_obs >= 400 ms under the realistic sensor noise (40 Hz: ~20 %). None = off.
     lowpass_hz: float | None = 20.0
     filter_order: int = 4
     baseline_s: float = 0.2  # s, pre-onset span averaged for q0 and tau0 (paper IV-C)
-    xi_source: str = "truth"  # known xi for the reduced model: model truth or the paper's values
+    xi_source: XiSource = "truth"  # known xi for the reduced model: model truth or the paper's values
     symmetry_tol: float = 0.1  # quasi-symmetric when ||A - A^T||_F / ||A + A^T||_F below this
     constancy_tol: float = 0.05  # quasi-constant when relative change to next window below this
     t_obs_s: list[float] | None = None  # explicit windows; None = T_k + 70 ms per scenario window
 
     def __post_init__(self) -> None:
-        choice("estimator.method", self.method, ("joint_ls",))
-        choice("estimator.xi_source", self.xi_source, XI_SOURCES)
+        choice("estimator.method", self.method, choices.EstimatorMethod)
+        choice("estimator.xi_source", self.xi_source, choices.XiSource)
         if self.lowpass_hz is not None:
             check(self.lowpass_hz > 0, f"estimator.lowpass_hz must be > 0 Hz or null, got {self.lowpass_hz}")
         check(self.filter_order >= 1, f"estimator.filter_order must be >= 1, got {self.filter_order}")
@@ -221,8 +241,8 @@ class ElbowConfig:
     Grasp values are translational at the handle and enter the model as ``k L^2``.
     """
 
-    model: str = "elbow_1dof"
-    impedance: str = "muscle"
+    model: ElbowModel = "elbow_1dof"
+    impedance: ElbowImpedance = "muscle"
     cocontraction: float = 0.5  # activation of both muscles; the paper's subjects co-contract
     # Grasp of the hand on the handle (assumption, inside the range of the grasp elements of the
     # five-element models of seeds/004 Table II read by Eqs. (32)-(37): k1 770-15000 N/m,
@@ -240,8 +260,8 @@ class ElbowConfig:
     oustaloup_order: int = 6  # pole-zero pairs per side, 2N + 1 in all
 
     def __post_init__(self) -> None:
-        choice("elbow.model", self.model, ("elbow_1dof",))
-        choice("elbow.impedance", self.impedance, ELBOW_IMPEDANCES)
+        choice("elbow.model", self.model, choices.ElbowModel)
+        choice("elbow.impedance", self.impedance, choices.ElbowImpedance)
         check(
             0.0 < self.cocontraction < 1.0,
             f"elbow.cocontraction must lie in (0, 1), got {self.cocontraction}",
@@ -270,7 +290,7 @@ class DirectDriveConfig:
     (Eq. (21)); M_hat, C_hat, B_hat are the model's true values times ``1 + error``.
     """
 
-    model: str = "direct_drive"
+    model: MotorModel = "direct_drive"
     safety_range_rad: float = 0.9  # rad, motor range each way around zero (paper III-A)
     # relative error of M_hat. The compensation reads the accelerometer one control period late,
     # a positive feedback that is unstable for M_hat >= the true inertia; -0.2 keeps a margin
@@ -287,7 +307,7 @@ class DirectDriveConfig:
     current_bits: int = 16  # bits of the analog current reference (paper III-A: 16-bit input)
 
     def __post_init__(self) -> None:
-        choice("motor.model", self.model, ("direct_drive",))
+        choice("motor.model", self.model, choices.MotorModel)
         check(
             0 < self.safety_range_rad <= 1.0,
             "motor.safety_range_rad must lie in (0, 1.0] rad (mechanical stops at 1.0), "

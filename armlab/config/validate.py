@@ -25,7 +25,7 @@ def check(cond: bool, msg: str) -> None:
 
 
 def options(valid: Any) -> tuple[str, ...]:
-    """The values of a ``Literal[...]`` type, or the tuple itself."""
+    """The values of a ``Literal[...]`` type (see :mod:`armlab.config.choices`), or the tuple itself."""
     if get_origin(valid) is Literal:
         return get_args(valid)
     if not isinstance(valid, tuple):
