@@ -136,10 +136,10 @@ class VfsConfig:
     arm_reach_m: float = 0.5
 
     def __post_init__(self) -> None:
-        bad = [s for s in self.stiffness if s not in STIFFNESS_LABELS]
-        check(not bad, f"vfs.stiffness has unknown labels {bad}; valid: {list(STIFFNESS_LABELS)}")
-        bad = [p for p in self.payloads if p not in PAYLOAD_LABELS]
-        check(not bad, f"vfs.payloads has unknown labels {bad}; valid: {list(PAYLOAD_LABELS)}")
+        bad_k = [s for s in self.stiffness if s not in STIFFNESS_LABELS]
+        check(not bad_k, f"vfs.stiffness has unknown labels {bad_k}; valid: {list(STIFFNESS_LABELS)}")
+        bad_m = [p for p in self.payloads if p not in PAYLOAD_LABELS]
+        check(not bad_m, f"vfs.payloads has unknown labels {bad_m}; valid: {list(PAYLOAD_LABELS)}")
         for name in ("trials_per_config", "arm_trials", "robot_id_trials"):
             value = getattr(self, name)
             check(isinstance(value, int) and value >= 0, f"vfs.{name} must be an integer >= 0, got {value!r}")
