@@ -10,8 +10,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, get_args
 
-from armlab.errors import ConfigError
+from armlab.config import choices
+from armlab.config.validate import check, choice, options
 
 __all__ = [
     "CABLE_MODES",
@@ -20,21 +22,21 @@ __all__ = [
     "VfsConfig",
 ]
 
-CABLE_MODES = ("rigid", "compliant")
-ROBOT_MODELS = ("identified", "table_vi")
-STIFFNESS_LABELS = ("K1", "K2", "K3", "K4", "K5")  # Table I
-PAYLOAD_LABELS = ("M1", "M2", "M3", "M4", "M5")  # Table I
+if TYPE_CHECKING:
+    from armlab.config.choices import CableMode, CapstanModel, PayloadLabel, StiffnessLabel, VfsRobotModel
+else:  # OmegaConf 2.3 rejects Literal field types: it reads these as str, __post_init__ checks them
+    CableMode = CapstanModel = PayloadLabel = StiffnessLabel = VfsRobotModel = str
 
-
-def _check(cond: bool, msg: str) -> None:
-    if not cond:
-        raise ConfigError(msg)
+CABLE_MODES = get_args(choices.CableMode)
+ROBOT_MODELS = get_args(choices.VfsRobotModel)
+STIFFNESS_LABELS = get_args(choices.StiffnessLabel)  # Table I
+PAYLOAD_LABELS = get_args(choices.PayloadLabel)  # Table I
 
 
 def _positive(group: str, obj, *names: str) -> None:
     for name in names:
         value = getattr(obj, name)
-        _check(
+        check(
             isinstance(value, (int, float)) and math.isfinite(value) and value > 0,
             f"{group}.{name} must be a finite number > 0, got {value!r}",
         )
@@ -50,8 +52,8 @@ class CapstanConfig:
     from a point on the base to the end effector, so it acts mostly along x.
     """
 
-    model: str = "capstan_planar"
-    cable: str = "compliant"
+    model: CapstanModel = "capstan_planar"
+    cable: CableMode = "compliant"
     # Link-side capstan cable stiffness, N·m/rad (assumption: static end-effector compliance
     # J J^T / k below 1e-4 m/N, so that the series compliance biases Table I's stiffnesses by
     # < 5 %; the link-on-cable resonance with a payload lies near 15 Hz, which lets the rigid
@@ -75,11 +77,9 @@ class CapstanConfig:
     handle_mass_kg: float = 0.135  # kg, Lambda of Eq. (9), paper Sec. II-C
 
     def __post_init__(self) -> None:
-        _check(self.model == "capstan_planar", f"capstan.model={self.model!r}; valid: ['capstan_planar']")
-        _check(
-            self.cable in CABLE_MODES,
-            f"capstan.cable={self.cable!r} is not valid; choose one of {list(CABLE_MODES)}",
-        )
+        models = options(choices.CapstanModel)
+        check(self.model in models, f"capstan.model={self.model!r}; valid: {list(models)}")
+        choice("capstan.cable", self.cable, choices.CableMode)
         _positive(
             "capstan",
             self,
@@ -91,8 +91,8 @@ class CapstanConfig:
         )
         for name in ("cable_damping_Nms_per_rad", "kd_Nms_per_rad", "coulomb_Nm"):
             value = getattr(self, name)
-            _check(math.isfinite(value) and value >= 0, f"capstan.{name} must be >= 0, got {value!r}")
-        _check(
+            check(math.isfinite(value) and value >= 0, f"capstan.{name} must be >= 0, got {value!r}")
+        check(
             len(self.drag_anchor_m) == 2, f"capstan.drag_anchor_m must be (x, y) m, got {self.drag_anchor_m}"
         )
 
@@ -110,8 +110,8 @@ class VfsConfig:
     ``table_vi`` (the paper's alphas) or ``true`` (the simulated robot's own alphas).
     """
 
-    stiffness: list[str] = field(default_factory=lambda: list(STIFFNESS_LABELS))
-    payloads: list[str] = field(default_factory=lambda: list(PAYLOAD_LABELS))
+    stiffness: list[StiffnessLabel] = field(default_factory=lambda: list(STIFFNESS_LABELS))
+    payloads: list[PayloadLabel] = field(default_factory=lambda: list(PAYLOAD_LABELS))
     trials_per_config: int = 3  # paper Sec. II-C-1: three 50 s trials per configuration
     arm_trials: int = 5  # paper Sec. II-C-2: five trials of the human arm
     robot_id_trials: int = 6  # Appendix: six 50 s trials
@@ -128,7 +128,7 @@ class VfsConfig:
     sg_window: int = 151  # samples at 1 kHz, Sec. III-A
     lowpass_hz: float = 4.5  # Hz, zero-phase 5th-order Butterworth (Sec. III-A)
     lowpass_order: int = 5
-    robot_model: str = "identified"
+    robot_model: VfsRobotModel = "identified"
     id_drag: bool = False
     # human arm: handle at Table V's equilibrium (x_v, y_v) = (383, 15) mm, the shoulder 0.5 m
     # behind it along +x (hand 50 cm anterior to the shoulder, Sec. II-C-2)
@@ -136,39 +136,34 @@ class VfsConfig:
     arm_reach_m: float = 0.5
 
     def __post_init__(self) -> None:
-        bad = [s for s in self.stiffness if s not in STIFFNESS_LABELS]
-        _check(not bad, f"vfs.stiffness has unknown labels {bad}; valid: {list(STIFFNESS_LABELS)}")
-        bad = [p for p in self.payloads if p not in PAYLOAD_LABELS]
-        _check(not bad, f"vfs.payloads has unknown labels {bad}; valid: {list(PAYLOAD_LABELS)}")
+        bad_k = [s for s in self.stiffness if s not in STIFFNESS_LABELS]
+        check(not bad_k, f"vfs.stiffness has unknown labels {bad_k}; valid: {list(STIFFNESS_LABELS)}")
+        bad_m = [p for p in self.payloads if p not in PAYLOAD_LABELS]
+        check(not bad_m, f"vfs.payloads has unknown labels {bad_m}; valid: {list(PAYLOAD_LABELS)}")
         for name in ("trials_per_config", "arm_trials", "robot_id_trials"):
             value = getattr(self, name)
-            _check(
-                isinstance(value, int) and value >= 0, f"vfs.{name} must be an integer >= 0, got {value!r}"
-            )
-        _check(
+            check(isinstance(value, int) and value >= 0, f"vfs.{name} must be an integer >= 0, got {value!r}")
+        check(
             self.robot_id_trials >= 1 or self.robot_model != "identified",
             "vfs.robot_id_trials must be >= 1 when vfs.robot_model='identified'",
         )
         _positive(
             "vfs", self, "trial_s", "id_s", "val_s", "range_deg", "id_range_deg", "lowpass_hz", "arm_reach_m"
         )
-        _check(self.settle_s >= 0, f"vfs.settle_s must be >= 0 s, got {self.settle_s}")
-        _check(
+        check(self.settle_s >= 0, f"vfs.settle_s must be >= 0 s, got {self.settle_s}")
+        check(
             self.id_s <= self.trial_s and self.val_s <= self.trial_s,
             f"vfs.id_s ({self.id_s} s) and vfs.val_s ({self.val_s} s) must fit in "
             f"vfs.trial_s ({self.trial_s} s)",
         )
-        _check(self.n_sines >= 1, f"vfs.n_sines must be >= 1, got {self.n_sines}")
+        check(self.n_sines >= 1, f"vfs.n_sines must be >= 1, got {self.n_sines}")
         for name in ("band_hz", "id_band_hz"):
             lo, hi = getattr(self, name)
-            _check(0 < lo <= hi, f"vfs.{name} must be (low, high) Hz with 0 < low <= high, got {(lo, hi)}")
-        _check(
+            check(0 < lo <= hi, f"vfs.{name} must be (low, high) Hz with 0 < low <= high, got {(lo, hi)}")
+        check(
             self.sg_window % 2 == 1 and self.sg_window > self.sg_order >= 1,
             f"vfs.sg_window must be odd and longer than vfs.sg_order (a Savitzky-Golay window of "
             f"{self.sg_window} samples cannot fit a polynomial of order {self.sg_order})",
         )
-        _check(self.lowpass_order >= 1, f"vfs.lowpass_order must be >= 1, got {self.lowpass_order}")
-        _check(
-            self.robot_model in ROBOT_MODELS,
-            f"vfs.robot_model={self.robot_model!r} is not valid; choose one of {list(ROBOT_MODELS)}",
-        )
+        check(self.lowpass_order >= 1, f"vfs.lowpass_order must be >= 1, got {self.lowpass_order}")
+        choice("vfs.robot_model", self.robot_model, choices.VfsRobotModel)

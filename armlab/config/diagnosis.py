@@ -7,6 +7,7 @@ from dataclasses import dataclass, field, replace
 
 from hydra.core.config_store import ConfigStore
 
+from armlab.config.validate import check
 from armlab.errors import ConfigError
 
 __all__ = [
@@ -14,11 +15,6 @@ __all__ = [
     "RefereeConfig",
     "register_diagnosis_configs",
 ]
-
-
-def _check(cond: bool, msg: str) -> None:
-    if not cond:
-        raise ConfigError(msg)
 
 
 @dataclass(kw_only=True)
@@ -46,21 +42,21 @@ class DiagnosisConfig:
     indistinct_ratio: float = 0.9  # runner-up reduction / winner's above this -> flagged
 
     def __post_init__(self) -> None:
-        _check(self.fs_fit_hz > 0 and self.band_hz > 0, "diagnosis.fs_fit_hz and band_hz must be > 0")
-        _check(
+        check(self.fs_fit_hz > 0 and self.band_hz > 0, "diagnosis.fs_fit_hz and band_hz must be > 0")
+        check(
             0 < self.highpass_hz < self.band_hz,
             f"diagnosis.highpass_hz must lie in (0, band_hz={self.band_hz}), got {self.highpass_hz}",
         )
-        _check(
+        check(
             0.05 <= self.holdout_fraction <= 0.5,
             f"diagnosis.holdout_fraction must lie in [0.05, 0.5], got {self.holdout_fraction}",
         )
-        _check(1 <= self.max_effects <= 3, f"diagnosis.max_effects must be 1, 2 or 3, got {self.max_effects}")
-        _check(self.min_duration_s > 0, "diagnosis.min_duration_s must be > 0")
+        check(1 <= self.max_effects <= 3, f"diagnosis.max_effects must be 1, 2 or 3, got {self.max_effects}")
+        check(self.min_duration_s > 0, "diagnosis.min_duration_s must be > 0")
         for name in ("min_step_fraction", "min_floor_fraction", "min_first_explained", "none_tolerance"):
             value = getattr(self, name)
-            _check(value is None or value >= 0, f"diagnosis.{name} must be >= 0")
-        _check(
+            check(value is None or value >= 0, f"diagnosis.{name} must be >= 0")
+        check(
             self.min_explained is None or 0 <= self.min_explained <= 1,
             f"diagnosis.min_explained must lie in [0, 1], got {self.min_explained}",
         )
@@ -100,11 +96,11 @@ class RefereeConfig:
     jobs: int = 2  # datasets diagnosed in parallel (joblib)
 
     def __post_init__(self) -> None:
-        _check(self.replicates >= 1 and self.n_trials >= 2, "referee.replicates >= 1 and n_trials >= 2")
-        _check(self.noise_std_Nm > 0, "referee.noise_std_Nm must be > 0")
-        _check(self.force_noise_N > 0, "referee.force_noise_N must be > 0")
-        _check(self.cond_trials >= 6, "referee.cond_trials must be >= 6 (one per perturbation direction)")
-        _check(
+        check(self.replicates >= 1 and self.n_trials >= 2, "referee.replicates >= 1 and n_trials >= 2")
+        check(self.noise_std_Nm > 0, "referee.noise_std_Nm must be > 0")
+        check(self.force_noise_N > 0, "referee.force_noise_N must be > 0")
+        check(self.cond_trials >= 6, "referee.cond_trials must be >= 6 (one per perturbation direction)")
+        check(
             bool(self.cond_windows) and all(1 <= k <= 26 for k in self.cond_windows),
             f"referee.cond_windows must be window indices in 1..26, got {self.cond_windows}",
         )

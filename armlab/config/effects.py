@@ -18,10 +18,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields
-from typing import ClassVar
+from typing import ClassVar, get_args
 
 from hydra.core.config_store import ConfigStore
 
+from armlab.config.choices import EffectLevel
 from armlab.errors import ConfigError
 
 __all__ = [
@@ -50,7 +51,7 @@ __all__ = [
     "register_effect_configs",
 ]
 
-LEVELS = ("model", "controller", "sensor")
+LEVELS = get_args(EffectLevel)
 
 
 @dataclass(kw_only=True)
@@ -58,7 +59,7 @@ class Effect:
     """Base of every catalogue entry: positive, finite parameters unless a field says otherwise."""
 
     NAME: ClassVar[str] = ""
-    LEVEL: ClassVar[str] = "model"
+    LEVEL: ClassVar[EffectLevel] = "model"  # a ClassVar, not an OmegaConf field: the Literal stays
     PHYSICS: ClassVar[str] = ""
     SOURCE: ClassVar[str] = ""
     CONFUSABLE: ClassVar[dict[str, str]] = {}
@@ -162,7 +163,7 @@ class JointFriction(Effect):
 @dataclass(kw_only=True)
 class ForceSensorNoise(Effect):
     NAME: ClassVar[str] = "force_sensor_noise"
-    LEVEL: ClassVar[str] = "sensor"
+    LEVEL: ClassVar[EffectLevel] = "sensor"
     PHYSICS: ClassVar[str] = "extra white noise on the force/torque channel (sets the noise floor, not a gap)"
     SOURCE: ClassVar[str] = "JR3 50M31 datasheet; ATI Mini45: ~0.01-0.05 N·m per sample"
     std: float = 0.05  # N·m or N
@@ -171,7 +172,7 @@ class ForceSensorNoise(Effect):
 @dataclass(kw_only=True)
 class ForceSensorDrift(Effect):
     NAME: ClassVar[str] = "force_sensor_drift"
-    LEVEL: ClassVar[str] = "sensor"
+    LEVEL: ClassVar[EffectLevel] = "sensor"
     PHYSICS: ClassVar[str] = "offset and linear thermal drift of the force/torque channel"
     SOURCE: ClassVar[str] = "strain-gauge drift 0.1-1 % FS per minute (ATI F/T manual, temperature effects)"
     SIGNED: ClassVar[tuple[str, ...]] = ("bias", "drift_per_s")
@@ -182,7 +183,7 @@ class ForceSensorDrift(Effect):
 @dataclass(kw_only=True)
 class ForceSensorBandwidth(Effect):
     NAME: ClassVar[str] = "force_sensor_bandwidth"
-    LEVEL: ClassVar[str] = "sensor"
+    LEVEL: ClassVar[EffectLevel] = "sensor"
     PHYSICS: ClassVar[str] = "2nd-order Butterworth low-pass of the force/torque channel (electronics, DSP)"
     SOURCE: ClassVar[str] = "JR3 DSP filters 8-500 Hz; ankle rigs low-pass torque at 50-200 Hz"
     cutoff_hz: float = 20.0  # Hz
@@ -191,7 +192,7 @@ class ForceSensorBandwidth(Effect):
 @dataclass(kw_only=True)
 class AccelNoise(Effect):
     NAME: ClassVar[str] = "accel_noise"
-    LEVEL: ClassVar[str] = "sensor"
+    LEVEL: ClassVar[EffectLevel] = "sensor"
     PHYSICS: ClassVar[str] = "white noise and offset of the accelerometer"
     SOURCE: ClassVar[str] = "ADXL203 datasheet: 110 µg/sqrt(Hz), offset ±25 mg"
     SIGNED: ClassVar[tuple[str, ...]] = ("bias_m_s2",)
@@ -202,7 +203,7 @@ class AccelNoise(Effect):
 @dataclass(kw_only=True)
 class AccelMisalignment(Effect):
     NAME: ClassVar[str] = "accel_misalignment"
-    LEVEL: ClassVar[str] = "sensor"
+    LEVEL: ClassVar[EffectLevel] = "sensor"
     PHYSICS: ClassVar[str] = "accelerometer axes rotated in the plane relative to the handle frame"
     SOURCE: ClassVar[str] = "mounting tolerance ~1-3 deg (ADXL203 datasheet: axis alignment ±1 deg)"
     SIGNED: ClassVar[tuple[str, ...]] = ("angle_deg",)
@@ -212,7 +213,7 @@ class AccelMisalignment(Effect):
 @dataclass(kw_only=True)
 class EncoderQuantisation(Effect):
     NAME: ClassVar[str] = "encoder_quantisation"
-    LEVEL: ClassVar[str] = "sensor"
+    LEVEL: ClassVar[EffectLevel] = "sensor"
     PHYSICS: ClassVar[str] = "position rounded to the encoder's resolution before differentiation"
     SOURCE: ClassVar[str] = "16-bit absolute encoder: 2π/65536 rad ≈ 9.6e-5 rad; capstan rig 2 µm"
     step: float = 9.6e-5  # rad (joint) or m (Cartesian)
@@ -221,7 +222,7 @@ class EncoderQuantisation(Effect):
 @dataclass(kw_only=True)
 class ChannelDelay(Effect):
     NAME: ClassVar[str] = "channel_delay"
-    LEVEL: ClassVar[str] = "sensor"
+    LEVEL: ClassVar[EffectLevel] = "sensor"
     PHYSICS: ClassVar[str] = "the force channel recorded later than the position channel (separate DAQ/buses)"
     SOURCE: ClassVar[str] = "USB/EtherCAT F/T sensors vs encoder counters: 1-20 ms skew (JR3/ATI manuals)"
     CONFUSABLE: ClassVar[dict[str, str]] = {
@@ -263,7 +264,7 @@ class CocontractionVariation(Effect):
 @dataclass(kw_only=True)
 class RobotModelError(Effect):
     NAME: ClassVar[str] = "robot_model_error"
-    LEVEL: ClassVar[str] = "controller"
+    LEVEL: ClassVar[EffectLevel] = "controller"
     PHYSICS: ClassVar[str] = (
         "the robot's dynamic parameters used by the virtual force sensor differ from the real robot's"
     )

@@ -1,7 +1,8 @@
 """Typed configuration of an armlab experiment (the single source of truth for Hydra).
 
 Every group is a ``@dataclass(kw_only=True)`` whose ``__post_init__`` rejects invalid values with
-a message naming the valid range or choices. YAML files under ``configs/`` only set values.
+a message naming the valid range or choices. A choice is a ``Literal`` type of
+:mod:`armlab.config.choices`. YAML files under ``configs/`` only set values.
 Units are in the field names (``_s``, ``_hz``, ``_N``, ...) and sources in the comments.
 """
 
@@ -9,11 +10,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, get_args
 
 import numpy as np
 
+from armlab.config import choices
 from armlab.config.capstan import CapstanConfig, VfsConfig
 from armlab.config.effects import EffectsConfig
+from armlab.config.validate import check, choice
 from armlab.errors import ConfigError
 
 __all__ = [
@@ -36,43 +40,49 @@ __all__ = [
     "alpha_grid",
 ]
 
-MUSCLE_VARIANTS = ("hill", "linear")
-SENSOR_PRESETS = ("realistic", "ideal")
-XI_SOURCES = ("truth", "paper")
-ELBOW_IMPEDANCES = ("muscle", "five_element", "fractional")
+if TYPE_CHECKING:
+    from armlab.config.choices import (
+        ArmModel,
+        ElbowImpedance,
+        ElbowModel,
+        EstimatorMethod,
+        Integrator,
+        MotorModel,
+        MuscleModel,
+        RobotModel,
+        SensorPreset,
+        XiSource,
+    )
+else:  # OmegaConf 2.3 rejects Literal field types: it reads these as str, __post_init__ checks them
+    ArmModel = ElbowImpedance = ElbowModel = EstimatorMethod = Integrator = str
+    MotorModel = MuscleModel = RobotModel = SensorPreset = XiSource = str
 
-
-def _check(cond: bool, msg: str) -> None:
-    if not cond:
-        raise ConfigError(msg)
-
-
-def _choice(name: str, value: str, valid: tuple[str, ...]) -> None:
-    _check(value in valid, f"{name}={value!r} is not valid; choose one of {list(valid)}")
+MUSCLE_VARIANTS = get_args(choices.MuscleModel)
+SENSOR_PRESETS = get_args(choices.SensorPreset)
+XI_SOURCES = get_args(choices.XiSource)
+ELBOW_IMPEDANCES = get_args(choices.ElbowImpedance)
 
 
 @dataclass(kw_only=True)
 class ArmConfig:
     """The human arm model and the subject's posture and effort."""
 
-    model: str = "arm_planar"
-    muscle: str = "hill"  # "hill" (MuJoCo FLV muscle) or "linear" (exact spring-damper)
+    model: ArmModel = "arm_planar"
+    muscle: MuscleModel = "hill"  # "hill" (MuJoCo FLV muscle) or "linear" (exact spring-damper)
     q0: tuple[float, float] = (0.08, 1.00)  # rad, initial configuration, conditioning paper IV-B
     cocontraction: float = 0.2  # activation of every muscle before the pre-load is added
     preload_N: float = 5.0  # N, distal force the subject exerts, conditioning paper IV-B
     shoulder_pos_m: tuple[float, float, float] = (0.0, 0.0, 0.9)  # m, shoulder in world (seated)
 
     def __post_init__(self) -> None:
-        _choice("arm.model", self.model, ("arm_planar",))
-        _choice("arm.muscle", self.muscle, MUSCLE_VARIANTS)
-        _check(
+        choice("arm.model", self.model, choices.ArmModel)
+        choice("arm.muscle", self.muscle, choices.MuscleModel)
+        check(
             0.0 < self.cocontraction < 1.0, f"arm.cocontraction must lie in (0, 1), got {self.cocontraction}"
         )
-        _check(0.0 <= self.preload_N <= 50.0, f"arm.preload_N must lie in [0, 50] N, got {self.preload_N}")
-        _check(0.0 < self.q0[1] < 2.6, f"arm.q0 elbow angle must lie in (0, 2.6) rad, got {self.q0[1]}")
-        _check(
-            -0.7 < self.q0[0] < 2.3, f"arm.q0 shoulder angle must lie in (-0.7, 2.3) rad, got {self.q0[0]}"
-        )
+        check(0.0 <= self.preload_N <= 50.0, f"arm.preload_N must lie in [0, 50] N, got {self.preload_N}")
+        check(0.0 < self.q0[1] < 2.6, f"arm.q0 elbow angle must lie in (0, 2.6) rad, got {self.q0[1]}")
+        check(-0.7 < self.q0[0] < 2.3, f"arm.q0 shoulder angle must lie in (-0.7, 2.3) rad, got {self.q0[0]}")
 
 
 @dataclass(kw_only=True)
@@ -97,15 +107,15 @@ class ReflexConfig:
     def __post_init__(self) -> None:
         for name in ("stretch_latency_s", "spinal_latency_s"):
             value = getattr(self, name)
-            _check(value > 0, f"reflex.{name} must be positive (s), got {value}")
-        _check(
+            check(value > 0, f"reflex.{name} must be positive (s), got {value}")
+        check(
             self.stretch_latency_s <= self.spinal_latency_s,
             f"reflex.stretch_latency_s ({self.stretch_latency_s}) must not exceed "
             f"reflex.spinal_latency_s ({self.spinal_latency_s})",
         )
         for name in ("stretch_gain", "velocity_gain", "spinal_gain"):
             value = getattr(self, name)
-            _check(value >= 0, f"reflex.{name} must be >= 0, got {value}")
+            check(value >= 0, f"reflex.{name} must be >= 0, got {value}")
 
 
 @dataclass(kw_only=True)
@@ -120,24 +130,22 @@ class CuffConfig:
     mass_kg: float = 0.6  # kg, plastic cuff + metal support beam (assumption, paper IV-A)
 
     def __post_init__(self) -> None:
-        _check(
-            self.stiffness_N_per_m > 0, f"cuff.stiffness_N_per_m must be > 0, got {self.stiffness_N_per_m}"
-        )
-        _check(self.damping_Ns_per_m >= 0, f"cuff.damping_Ns_per_m must be >= 0, got {self.damping_Ns_per_m}")
-        _check(self.mass_kg > 0, f"cuff.mass_kg must be > 0, got {self.mass_kg}")
+        check(self.stiffness_N_per_m > 0, f"cuff.stiffness_N_per_m must be > 0, got {self.stiffness_N_per_m}")
+        check(self.damping_Ns_per_m >= 0, f"cuff.damping_Ns_per_m must be >= 0, got {self.damping_Ns_per_m}")
+        check(self.mass_kg > 0, f"cuff.mass_kg must be > 0, got {self.mass_kg}")
 
 
 @dataclass(kw_only=True)
 class RobotConfig:
     """The perturbing robot."""
 
-    model: str = "lwr"
+    model: RobotModel = "lwr"
     # m, robot base in the world, in front of and lateral to the subject (assumption: places the
     # hand at q0 well inside the LWR's workspace with the flange pointing down)
     base_pos_m: tuple[float, float, float] = (0.55, 0.75, 0.55)
 
     def __post_init__(self) -> None:
-        _choice("robot.model", self.model, ("lwr",))
+        choice("robot.model", self.model, choices.RobotModel)
 
 
 @dataclass(kw_only=True)
@@ -149,27 +157,25 @@ class SimConfig:
     # the estimators fit, with the stiff cuff-hand connect constraint (measured on the rigid
     # linear arm: xi within 0.3 %; implicitfast 0.6 %; RK4 2.6 %, it handles the soft constraint
     # poorly). See the issue note for the timestep study.
-    integrator: str = "Euler"
+    integrator: Integrator = "Euler"
     settle_s: float = 1.0  # s, settling of the pre-loaded hold before the trials start
 
     def __post_init__(self) -> None:
-        _choice("sim.integrator", self.integrator, ("RK4", "implicitfast", "Euler", "implicit"))
-        _check(
-            0 < self.timestep_s <= 0.001, f"sim.timestep_s must lie in (0, 0.001] s, got {self.timestep_s}"
-        )
-        _check(self.settle_s >= 0.2, f"sim.settle_s must be >= 0.2 s, got {self.settle_s}")
+        choice("sim.integrator", self.integrator, choices.Integrator)
+        check(0 < self.timestep_s <= 0.001, f"sim.timestep_s must lie in (0, 0.001] s, got {self.timestep_s}")
+        check(self.settle_s >= 0.2, f"sim.settle_s must be >= 0.2 s, got {self.settle_s}")
 
 
 @dataclass(kw_only=True)
 class SensorsConfig:
     """Sensor models applied to the clean simulated signals."""
 
-    preset: str = "realistic"  # "realistic" (JR3/LWR-class noise) or "ideal"
+    preset: SensorPreset = "realistic"  # "realistic" (JR3/LWR-class noise) or "ideal"
     fs_hz: float = 1000.0  # Hz, sampling rate of the recording system (paper IV-A)
 
     def __post_init__(self) -> None:
-        _choice("sensors.preset", self.preset, SENSOR_PRESETS)
-        _check(self.fs_hz > 0, f"sensors.fs_hz must be > 0, got {self.fs_hz}")
+        choice("sensors.preset", self.preset, choices.SensorPreset)
+        check(self.fs_hz > 0, f"sensors.fs_hz must be > 0, got {self.fs_hz}")
 
 
 @dataclass(kw_only=True)
@@ -182,7 +188,7 @@ class ScenarioConfig:
 
     def __post_init__(self) -> None:
         if self.n_trials is not None:
-            _check(
+            check(
                 self.n_trials >= 2,
                 f"scenario.n_trials must be >= 2 (identify + validate), got {self.n_trials}",
             )
@@ -192,35 +198,35 @@ class ScenarioConfig:
 class EstimatorConfig:
     """Processing and least-squares identification (paper IV-C, III-A, III-C)."""
 
-    method: str = "joint_ls"
+    method: EstimatorMethod = "joint_ls"
     # Hz, phase-free low-pass of q and F before differentiation (paper IV-C gives no cutoff). The
     # same zero-phase filter on both sides keeps the linear fit consistent; 20 Hz keeps K within
     # ~5 % at T_obs >= 400 ms under the realistic sensor noise (40 Hz: ~20 %). None = off.
     lowpass_hz: float | None = 20.0
     filter_order: int = 4
     baseline_s: float = 0.2  # s, pre-onset span averaged for q0 and tau0 (paper IV-C)
-    xi_source: str = "truth"  # known xi for the reduced model: model truth or the paper's values
+    xi_source: XiSource = "truth"  # known xi for the reduced model: model truth or the paper's values
     symmetry_tol: float = 0.1  # quasi-symmetric when ||A - A^T||_F / ||A + A^T||_F below this
     constancy_tol: float = 0.05  # quasi-constant when relative change to next window below this
     t_obs_s: list[float] | None = None  # explicit windows; None = T_k + 70 ms per scenario window
 
     def __post_init__(self) -> None:
-        _choice("estimator.method", self.method, ("joint_ls",))
-        _choice("estimator.xi_source", self.xi_source, XI_SOURCES)
+        choice("estimator.method", self.method, choices.EstimatorMethod)
+        choice("estimator.xi_source", self.xi_source, choices.XiSource)
         if self.lowpass_hz is not None:
-            _check(self.lowpass_hz > 0, f"estimator.lowpass_hz must be > 0 Hz or null, got {self.lowpass_hz}")
-        _check(self.filter_order >= 1, f"estimator.filter_order must be >= 1, got {self.filter_order}")
-        _check(self.baseline_s > 0, f"estimator.baseline_s must be > 0 s, got {self.baseline_s}")
-        _check(
+            check(self.lowpass_hz > 0, f"estimator.lowpass_hz must be > 0 Hz or null, got {self.lowpass_hz}")
+        check(self.filter_order >= 1, f"estimator.filter_order must be >= 1, got {self.filter_order}")
+        check(self.baseline_s > 0, f"estimator.baseline_s must be > 0 s, got {self.baseline_s}")
+        check(
             0 < self.symmetry_tol < 1, f"estimator.symmetry_tol must lie in (0, 1), got {self.symmetry_tol}"
         )
-        _check(
+        check(
             0 < self.constancy_tol < 1,
             f"estimator.constancy_tol must lie in (0, 1), got {self.constancy_tol}",
         )
         if self.t_obs_s is not None:
             bad = [t for t in self.t_obs_s if not (math.isfinite(t) and t > 0)]
-            _check(not bad, f"estimator.t_obs_s must hold positive times in s, got {bad}")
+            check(not bad, f"estimator.t_obs_s must hold positive times in s, got {bad}")
 
 
 @dataclass(kw_only=True)
@@ -235,8 +241,8 @@ class ElbowConfig:
     Grasp values are translational at the handle and enter the model as ``k L^2``.
     """
 
-    model: str = "elbow_1dof"
-    impedance: str = "muscle"
+    model: ElbowModel = "elbow_1dof"
+    impedance: ElbowImpedance = "muscle"
     cocontraction: float = 0.5  # activation of both muscles; the paper's subjects co-contract
     # Grasp of the hand on the handle (assumption, inside the range of the grasp elements of the
     # five-element models of seeds/004 Table II read by Eqs. (32)-(37): k1 770-15000 N/m,
@@ -254,27 +260,25 @@ class ElbowConfig:
     oustaloup_order: int = 6  # pole-zero pairs per side, 2N + 1 in all
 
     def __post_init__(self) -> None:
-        _choice("elbow.model", self.model, ("elbow_1dof",))
-        _choice("elbow.impedance", self.impedance, ELBOW_IMPEDANCES)
-        _check(
+        choice("elbow.model", self.model, choices.ElbowModel)
+        choice("elbow.impedance", self.impedance, choices.ElbowImpedance)
+        check(
             0.0 < self.cocontraction < 1.0,
             f"elbow.cocontraction must lie in (0, 1), got {self.cocontraction}",
         )
         for name in ("grasp_stiffness_N_per_m", "arm_stiffness_Nm_per_rad", "fractional_coeff"):
             value = getattr(self, name)
-            _check(value > 0, f"elbow.{name} must be > 0, got {value}")
+            check(value > 0, f"elbow.{name} must be > 0, got {value}")
         for name in ("grasp_damping_Ns_per_m", "arm_damping_Nms_per_rad"):
             value = getattr(self, name)
-            _check(value >= 0, f"elbow.{name} must be >= 0, got {value}")
-        _check(
+            check(value >= 0, f"elbow.{name} must be >= 0, got {value}")
+        check(
             0.0 < self.fractional_order < 1.0,
             f"elbow.fractional_order must lie in (0, 1) (a springpot), got {self.fractional_order}",
         )
         lo, hi = self.oustaloup_band_hz
-        _check(
-            0 < lo < hi, f"elbow.oustaloup_band_hz must be (low, high) with 0 < low < high, got {(lo, hi)}"
-        )
-        _check(self.oustaloup_order >= 1, f"elbow.oustaloup_order must be >= 1, got {self.oustaloup_order}")
+        check(0 < lo < hi, f"elbow.oustaloup_band_hz must be (low, high) with 0 < low < high, got {(lo, hi)}")
+        check(self.oustaloup_order >= 1, f"elbow.oustaloup_order must be >= 1, got {self.oustaloup_order}")
 
 
 @dataclass(kw_only=True)
@@ -286,7 +290,7 @@ class DirectDriveConfig:
     (Eq. (21)); M_hat, C_hat, B_hat are the model's true values times ``1 + error``.
     """
 
-    model: str = "direct_drive"
+    model: MotorModel = "direct_drive"
     safety_range_rad: float = 0.9  # rad, motor range each way around zero (paper III-A)
     # relative error of M_hat. The compensation reads the accelerometer one control period late,
     # a positive feedback that is unstable for M_hat >= the true inertia; -0.2 keeps a margin
@@ -303,26 +307,26 @@ class DirectDriveConfig:
     current_bits: int = 16  # bits of the analog current reference (paper III-A: 16-bit input)
 
     def __post_init__(self) -> None:
-        _choice("motor.model", self.model, ("direct_drive",))
-        _check(
+        choice("motor.model", self.model, choices.MotorModel)
+        check(
             0 < self.safety_range_rad <= 1.0,
             "motor.safety_range_rad must lie in (0, 1.0] rad (mechanical stops at 1.0), "
             f"got {self.safety_range_rad}",
         )
         for name in ("inertia_error", "viscous_error", "coulomb_error"):
             value = getattr(self, name)
-            _check(
+            check(
                 value >= -1.0,
                 f"motor.{name} must be >= -1 (a relative error; -1 drops the term), got {value}",
             )
         for name in ("kp", "ki_per_s", "kd_s", "sign_deadband_rad_s"):
             value = getattr(self, name)
-            _check(value >= 0, f"motor.{name} must be >= 0, got {value}")
-        _check(
+            check(value >= 0, f"motor.{name} must be >= 0, got {value}")
+        check(
             self.derivative_cutoff_hz > 0,
             f"motor.derivative_cutoff_hz must be > 0, got {self.derivative_cutoff_hz}",
         )
-        _check(
+        check(
             8 <= self.current_bits <= 24, f"motor.current_bits must lie in [8, 24], got {self.current_bits}"
         )
 
@@ -353,15 +357,15 @@ class FrfConfig:
     filter_force: bool = False
 
     def __post_init__(self) -> None:
-        _check(
+        check(
             0 < self.fir_pass_hz < self.fir_stop_hz,
             "frf.fir_pass_hz must be > 0 and below frf.fir_stop_hz, "
             f"got {self.fir_pass_hz}, {self.fir_stop_hz}",
         )
-        _check(self.welch_window >= 16, f"frf.welch_window must be >= 16 samples, got {self.welch_window}")
-        _check(0 <= self.welch_overlap < 1, f"frf.welch_overlap must lie in [0, 1), got {self.welch_overlap}")
+        check(self.welch_window >= 16, f"frf.welch_window must be >= 16 samples, got {self.welch_window}")
+        check(0 <= self.welch_overlap < 1, f"frf.welch_overlap must lie in [0, 1), got {self.welch_overlap}")
         lo, hi = self.band_hz
-        _check(0 <= lo < hi, f"frf.band_hz must be (low, high) with 0 <= low < high, got {(lo, hi)}")
+        check(0 <= lo < hi, f"frf.band_hz must be (low, high) with 0 <= low < high, got {(lo, hi)}")
         try:
             alpha_grid(self.alpha_step)
         except ConfigError:
@@ -374,11 +378,11 @@ class FrfConfig:
         """Reject settings the recording cannot support: a band at or beyond Nyquist, a Welch
         window longer than the record."""
         lo, hi = self.band_hz
-        _check(
+        check(
             hi < fs_hz / 2,
             f"frf.band_hz upper edge {hi} Hz is at or beyond Nyquist ({fs_hz / 2} Hz); valid: < {fs_hz / 2}",
         )
-        _check(
+        check(
             self.welch_window <= n_samples,
             f"frf.welch_window = {self.welch_window} samples is longer than the {what} "
             f"({n_samples} samples); valid: <= {n_samples}",
@@ -411,4 +415,4 @@ class ExperimentConfig:
     effects: EffectsConfig = field(default_factory=EffectsConfig)  # the catalogue, all off by default
 
     def __post_init__(self) -> None:
-        _check(self.seed >= 0, f"seed must be a non-negative integer, got {self.seed}")
+        check(self.seed >= 0, f"seed must be a non-negative integer, got {self.seed}")
