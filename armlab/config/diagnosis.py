@@ -84,7 +84,7 @@ class RefereeConfig:
     trial_s: float = 30.0  # s per trial
     fs_hz: float = 1000.0  # Hz, recorded rate
     noise_std_Nm: float = 0.15  # N·m, torque sensor noise (JR3/ATI class at the ankle)
-    # conditioning_window: trials per window in 6 directions, of the windows k (T_k = 40 ms +
+    # the conditioning-window referee: trials per window in 6 directions, of the windows k (T_k = 40 ms +
     # k·10 ms; k = 26 is the paper's slowest, 300 ms: a force low-pass and a channel delay are
     # then indistinct; adding k = 1, the 50 ms ramp, tells them apart 10/10 and 9/10 on the
     # tuning seed but defeats the cuff surrogate, see CondSet.u), and the white noise of the
