@@ -6,6 +6,7 @@ from dataclasses import replace
 
 import numpy as np
 import pytest
+from omegaconf import OmegaConf
 
 from armlab.config.schema import (
     ElbowConfig,
@@ -16,6 +17,7 @@ from armlab.config.schema import (
     SimConfig,
 )
 from armlab.errors import ConfigError
+from armlab.protocols.fractional_elbow import hooks
 from armlab.protocols.fractional_elbow.config import FractionalElbowConfig
 from armlab.protocols.fractional_elbow.experiment import estimate_fractional, simulate_fractional
 
@@ -35,6 +37,19 @@ def five_element_run():
     rec = simulate_fractional(CFG)
     trials, truth = rec.trials, rec.truth
     return trials, truth, estimate_fractional(trials, CFG.frf, truth)[0]
+
+
+def test_reestimate_rebuilds_the_truth_from_a_stored_config_of_any_vintage(five_element_run):
+    # a run stores its composed config with the trials; runs made before the per-protocol configs
+    # stored every group of every protocol (here an extra arm group): both re-estimate alike, and
+    # exactly as the run itself did (same trials, same settings, same truth)
+    trials, _, results = five_element_run
+    stored = OmegaConf.create(OmegaConf.to_yaml(OmegaConf.structured(CFG)))  # as read from trials.h5
+    old = OmegaConf.merge(stored, {"arm": {"muscle": "hill"}, "capstan": {"drag": True}})
+    for cfg in (stored, old):
+        again = hooks.reestimate(trials, cfg, [])
+        assert again["five_element_rel_err"] == results["five_element_rel_err"]
+        assert again["models"].keys() == results["models"].keys()
 
 
 def test_third_order_model_recovers_the_five_elements(five_element_run):

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from dataclasses import fields
+
 from omegaconf import OmegaConf
 
 from armlab.config.schema import FrfConfig
@@ -34,7 +36,9 @@ def reestimate(trials: TrialSet, stored, overrides: list[str]) -> dict:
     frf = apply_overrides(stored_group(FrfConfig, stored, "frf"), "frf", overrides)
     truth = None
     if "elbow" in stored:
-        exp = OmegaConf.to_object(OmegaConf.merge(OmegaConf.structured(FractionalElbowConfig), stored))
+        # the groups this protocol reads (runs made before the per-protocol configs stored them all)
+        own = {f.name: stored[f.name] for f in fields(FractionalElbowConfig) if f.name in stored}
+        exp = OmegaConf.to_object(OmegaConf.merge(OmegaConf.structured(FractionalElbowConfig), own))
         truth = elbow_truth(build_direct_drive_scene(exp.elbow, exp.sim), exp.elbow, trials.fs_hz)
     results, _ = estimate_fractional(trials, frf, truth)
     return results
