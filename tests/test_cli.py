@@ -138,9 +138,11 @@ def test_estimate_rejects_unknown_estimator_field(small_run, capsys):
     assert "unknown estimator field 'nope'" in capsys.readouterr().err
 
 
-def test_multirun_sweeps_seeds_into_separate_directories(tmp_path):
+@pytest.mark.parametrize("launcher", [[], ["hydra/launcher=joblib"]], ids=["basic", "joblib"])
+def test_multirun_sweeps_seeds_into_separate_directories(tmp_path, launcher):
     sweep = tmp_path / "sweep"
-    proc = _armlab("run", "--multirun", "seed=0,1", *_SMALL, f"hydra.sweep.dir={sweep}", cwd=tmp_path)
+    args = ["run", "--multirun", "seed=0,1", *_SMALL, *launcher, f"hydra.sweep.dir={sweep}"]
+    proc = _armlab(*args, cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
     runs = sorted(p for p in sweep.iterdir() if (p / "results.json").is_file())
     assert [p.name for p in runs] == ["0", "1"]

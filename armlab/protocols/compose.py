@@ -55,7 +55,7 @@ def _check(protocol: Protocol, overrides: list[str]) -> None:
             raise ConfigError(f"argument {item!r} must look like key=value (e.g. seed=3, arm=planar_linear)")
         bare = key.lstrip("+~")
         top = bare.split(".", 1)[0]
-        if top == "hydra":
+        if top == "hydra" or top.startswith("hydra/"):  # Hydra's own settings and groups (launcher, ...)
             continue
         if bare in seen:
             raise ConfigError(f"{bare} is given twice ({seen[bare]!r} and {item!r}); give it once")
