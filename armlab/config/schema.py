@@ -305,6 +305,10 @@ class DirectDriveConfig:
     derivative_cutoff_hz: float = 40.0  # Hz, low-pass of the measured velocity/acceleration
     sign_deadband_rad_s: float = 0.002  # rad/s, below which sign(theta_d) is taken as 0
     current_bits: int = 16  # bits of the analog current reference (paper III-A: 16-bit input)
+    # kg, part of the handle body that sits beyond the force sensor's measuring plane (grip and
+    # the sensor's tool-side plate): the sensor then reads F_hand + m L theta_dd. 0 = the sensor
+    # at the skin (the old lab); the fractional-elbow protocol sets its value in its YAML.
+    sensed_mass_kg: float = 0.0
 
     def __post_init__(self) -> None:
         choice("motor.model", self.model, choices.MotorModel)
@@ -329,6 +333,7 @@ class DirectDriveConfig:
         check(
             8 <= self.current_bits <= 24, f"motor.current_bits must lie in [8, 24], got {self.current_bits}"
         )
+        check(self.sensed_mass_kg >= 0, f"motor.sensed_mass_kg must be >= 0 kg, got {self.sensed_mass_kg}")
 
 
 def alpha_grid(step: float = 0.1) -> np.ndarray:

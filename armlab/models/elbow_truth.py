@@ -44,6 +44,8 @@ class ElbowTruth:
         grasp_k: N·m/rad, grasp_d N·m·s/rad (rotational).
         L: m, link length.
         element: the fractional element (fractional option only).
+        sensed_mass: kg, handle mass beyond the force sensor: the measured response is
+            ``1 / (1 / G + m L s²)`` (0: the sensor at the skin).
     """
 
     impedance: str
@@ -54,6 +56,7 @@ class ElbowTruth:
     grasp_d: float
     L: float
     element: FractionalElement | None = None
+    sensed_mass: float = 0.0
 
     def response(self, f_hz: np.ndarray, realised: bool = True) -> np.ndarray:
         """True ``theta / F`` (rad/N); ``realised=False`` uses ``c s^beta`` instead of Oustaloup's H."""
@@ -62,7 +65,10 @@ class ElbowTruth:
         if self.element is not None:
             za = za + self.element.response(f_hz, realised=realised)
         zg = self.grasp_k + self.grasp_d * s
-        return self.L * (1.0 / zg + 1.0 / za)
+        g = self.L * (1.0 / zg + 1.0 / za)
+        if self.sensed_mass:
+            g = 1.0 / (1.0 / g + self.sensed_mass * self.L * s**2)
+        return g
 
     @property
     def fractional_order(self) -> float | None:
@@ -91,6 +97,7 @@ class ElbowTruth:
             "grasp_k_Nm_per_rad": self.grasp_k,
             "grasp_d_Nms_per_rad": self.grasp_d,
             "L_m": self.L,
+            "sensed_mass_kg": self.sensed_mass,
         }
         fe = self.five_element
         out["five_element"] = {"M": fe.M, "k1": fe.k1, "k2": fe.k2, "d1": fe.d1, "d2": fe.d2}
@@ -99,8 +106,11 @@ class ElbowTruth:
         return out
 
 
-def elbow_truth(scene: DirectDriveScene, elbow: ElbowConfig, fs_hz: float) -> ElbowTruth:
-    """Linearise the elbow of ``scene`` at the hold posture (both angles 0, muscles at co-contraction)."""
+def elbow_truth(
+    scene: DirectDriveScene, elbow: ElbowConfig, fs_hz: float, sensed_mass_kg: float = 0.0
+) -> ElbowTruth:
+    """Linearise the elbow of ``scene`` at the hold posture (both angles 0, muscles at co-contraction);
+    ``sensed_mass_kg`` is the handle mass beyond the force sensor (``motor.sensed_mass_kg``)."""
     m = scene.model
     data = mujoco.MjData(m)
     if scene.muscle_act.size:
@@ -134,4 +144,5 @@ def elbow_truth(scene: DirectDriveScene, elbow: ElbowConfig, fs_hz: float) -> El
         grasp_d=scene.grasp_d,
         L=scene.link_length,
         element=element,
+        sensed_mass=float(sensed_mass_kg),
     )

@@ -42,7 +42,8 @@ class ForceTrial:
     Attributes:
         f_ref: N, reference force at the handle.
         f_measured: N, the force sensor's reading (what the controller used).
-        f_true: N, the grasp force on the hand along the link normal.
+        f_true: N, the grasp force on the hand along the link normal (the sensor reads it plus
+            ``motor.sensed_mass_kg`` times the handle's tangential acceleration).
         theta_measured: rad, the encoder reading; ``theta_true`` rad the motor angle.
         phi_true: rad, the elbow angle from the hold posture.
         current: A, commanded motor current; ``tau_motor`` N·m = K_torque · current.
@@ -179,7 +180,9 @@ def simulate_force_trial(
         psi = float(data.sensordata[sl_psi][0])
         psid = float(data.sensordata[sl_psid][0])
         f_true = -(kg * psi + dg * psid) / L
-        f_meas = _measure(f_true, k, f_noise, f_bias, f_drift, t, force_spec.quant_step)
+        # the sensor also carries the handle mass beyond its measuring plane (tangential a_y)
+        f_sensor = f_true + motor.sensed_mass_kg * float(data.sensordata[sl_acc][1])
+        f_meas = _measure(f_sensor, k, f_noise, f_bias, f_drift, t, force_spec.quant_step)
         th_meas = _measure(theta, k, e_noise, e_bias, 0.0, t, encoder_spec.quant_step)
         if k == 0:
             theta_prev, e_prev = th_meas, ref[0] - f_meas

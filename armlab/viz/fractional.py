@@ -422,8 +422,11 @@ def format_fractional_table(results: Mapping[str, Any]) -> str:
             entry = {**frac, **(frac.get("best_indices") or {}), "alpha": beta, "mse": mse}
         else:
             entry = models.get(key) or {}
+        label = _model_label(key) if key != FFE else "frac. five-element"
+        if entry.get("stable") is False:
+            label += " UNSTABLE"
         row = [
-            _model_label(key) if key != FFE else "frac. five-element",
+            label,
             _order(entry.get("alpha")),
             _cell(entry.get("mse"), ".2f", 1e7),
             _cell(entry.get("mad"), ".2f", 1e4),
@@ -458,6 +461,15 @@ def format_fractional_table(results: Mapping[str, Any]) -> str:
         "-" * len(line(header)),
         *(line(r) for r in rows),
     ]
+    for key in keys:
+        rej = (models.get(key) or {}).get("rejected_unstable") if key != FFE else None
+        if rej:
+            out.append(
+                f"{_model_label(key)}: α = {_order(rej.get('alpha'))} fits better (MSE "
+                f"{_cell(rej.get('mse'), '.2f', 1e7)}) but is unstable: rejected, the best stable α kept"
+            )
+    if results.get("stability_rule"):
+        out.append(f"rule: {results['stability_rule']}")
     beta, true_beta = _num(frac.get("best_order")), _num(frac.get("true_order"))
     if beta is not None:
         out.append(
@@ -478,7 +490,15 @@ def format_fractional_table(results: Mapping[str, Any]) -> str:
     if fe:
         out.append("five-element fit (integer): " + params(fe))
         if results.get("five_element_rel_err"):
-            out.append("  rel. error vs the intrinsic truth: " + rel(results["five_element_rel_err"]))
+            out.append(
+                "  rel. error vs the intrinsic truth (muscles, activations frozen): "
+                + rel(results["five_element_rel_err"])
+            )
+        if results.get("five_element_rel_err_effective"):
+            out.append(
+                "  rel. error vs the effective truth (reflex included): "
+                + rel(results["five_element_rel_err_effective"])
+            )
     if frac.get("best"):
         units = {**_FIVE_UNITS, "d2": "N·s^β/m"}  # the springpot's coefficient
         out.append(f"fractional five-element fit (β = {_order(beta)}): " + params(frac["best"], units))

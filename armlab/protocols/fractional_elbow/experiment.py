@@ -47,7 +47,11 @@ from armlab.sim.force_control import simulate_force_trial
 
 __all__ = [
     "FractionalRecording",
+    "PAPER_FIG4",
     "PAPER_TABLE_I",
+    "STABILITY_RULE",
+    "bode_features",
+    "effective_arm",
     "estimate_fractional",
     "simulate_fractional",
     "time_overlay",
@@ -62,6 +66,21 @@ PAPER_TABLE_I = {
     "A": {"alpha": 1.0, "mse": 11.52e-7, "mad": 6.71e-4, "r2": 0.8, "n_params": 3},
     "B": {"alpha": 1.0, "mse": 11.59e-7, "mad": 6.72e-4, "r2": 0.8, "n_params": 4},
 }
+# Fig. 4 of seeds/004, read from the printed models (27), (28), (29) on 0.12-15 Hz (the figure's
+# curves; computed by armlab.reproduction.fractional): DC gain (dB re 1 rad/N), resonance peak above
+# DC (dB) and its frequency, level (dB) and phase (deg) at 15 Hz, as [low, high] over the three
+PAPER_FIG4 = {
+    "dc_db": (-49.1, -46.0),
+    "peak_db": (0.74, 3.69),
+    "peak_hz": (4.99, 5.28),
+    "level_15_db": (-72.2, -65.2),
+    "phase_15_deg": (-176.0, -134.0),
+}
+#: How a Table I row is chosen when some fits are unstable (issue 17: never silently skipped).
+STABILITY_RULE = (
+    "alpha sweeps keep the smallest-MSE stable fit (Matignon's condition); a smaller-MSE unstable "
+    "fit is rejected and named; a fixed-order fit that is unstable is reported and marked unstable"
+)
 # m/s² rms, noise of the JR3's built-in accelerometer used by the inertia compensation
 # (assumption: strain-gauge sensor accelerometers resolve of order 0.1 m/s²) -> /L rad/s²
 _ACCEL_NOISE_M_S2 = 0.1
@@ -88,7 +107,7 @@ def simulate_fractional(cfg: FractionalElbowConfig) -> FractionalRecording:
             f"valid: sensors.fs_hz={scenario.fs_hz:g}"
         )
     scene = build_direct_drive_scene(cfg.elbow, cfg.sim)
-    truth = elbow_truth(scene, cfg.elbow, scenario.fs_hz)
+    truth = elbow_truth(scene, cfg.elbow, scenario.fs_hz, cfg.motor.sensed_mass_kg)
     ideal = cfg.sensors.preset == "ideal"
     force_spec, enc_spec = (ChannelSpec(), ChannelSpec()) if ideal else (JR3_FORCE, DD_ENCODER)
     accel_noise = 0.0 if ideal else _ACCEL_NOISE_M_S2 / scene.link_length
@@ -124,6 +143,7 @@ def simulate_fractional(cfg: FractionalElbowConfig) -> FractionalRecording:
     }
     channels = {k: np.stack([getattr(t, k) for t in trials])[..., None] for k in names}
     channels["true_activation"] = np.stack([t.activation for t in trials])
+    reflex_on = bool(cfg.reflex.enabled and scene.muscle_act.size)
     units = {**names, "true_activation": "1"}
     trial_set = TrialSet(
         fs_hz=scenario.fs_hz,
@@ -135,6 +155,7 @@ def simulate_fractional(cfg: FractionalElbowConfig) -> FractionalRecording:
             "protocol": "fractional_elbow",
             "seed": cfg.seed,
             "link_length_m": scene.link_length,
+            "reflex_enabled": reflex_on,
             "ground_truth": truth.as_dict(),
         },
     )
@@ -149,6 +170,55 @@ def _ffe_bandwidth(element: FiveElement, beta: float) -> float | None:
         )
     except EstimationError:
         return None
+
+
+def bode_features(f_hz: np.ndarray, G: np.ndarray) -> dict:
+    """The Fig. 4 features of a response on its band: DC gain (dB re 1 rad/N, at the lowest
+    frequency), resonance peak above DC (dB, 0 when |G| never rises) and its frequency (Hz), level
+    (dB) and unwrapped phase (deg) at the highest frequency, and the lowest phase (deg)."""
+    db = 20.0 * np.log10(np.abs(G))
+    ph = np.degrees(np.unwrap(np.angle(G)))
+    i = int(np.argmax(db))
+    return {
+        "dc_db": float(db[0]),
+        "peak_db": float(db[i] - db[0]),
+        "peak_hz": float(f_hz[i]),
+        "level_15_db": float(db[-1]),
+        "phase_15_deg": float(ph[-1]),
+        "min_phase_deg": float(ph.min()),
+        "f_top_hz": float(f_hz[-1]),
+    }
+
+
+def effective_arm(
+    f_hz: np.ndarray, Y: np.ndarray, inertia: float
+) -> tuple[float, float]:
+    """Effective arm stiffness K (N·m/rad) and damping D (N·m·s/rad), reflex included.
+
+    ``Y`` is the arm's noise-free admittance ``phi / (F L)`` (rad/(N·m)) measured on the band;
+    with the inertia known, ``K`` and ``D`` minimise the relative impedance error
+    ``sum |1/Y - (K - I w² + j D w)|² / |1/Y|²`` (linear least squares, real and imaginary parts
+    separate).
+    """
+    w = 2.0 * np.pi * np.asarray(f_hz, dtype=float)
+    Z = 1.0 / np.asarray(Y)
+    wt = 1.0 / np.abs(Z) ** 2
+    K = float(np.sum(wt * (Z.real + inertia * w**2)) / np.sum(wt))
+    D = float(np.sum(wt * w * Z.imag) / np.sum(wt * w**2))
+    return K, D
+
+
+def _sweep(f: np.ndarray, G: np.ndarray, structure, alphas: np.ndarray) -> tuple[LevyFit, dict | None]:
+    """The alpha sweep under :data:`STABILITY_RULE`: (kept fit, the rejected unstable one or None)."""
+    sweep = levy_sweep(f, G, structure, alphas=alphas, stable_only=False)
+    stable = [ft for ft in sweep.fits if ft.stable and np.isfinite(ft.indices.mse)]
+    if not stable:  # nothing stable: the best is reported, marked unstable (stable = False)
+        return sweep.best, None
+    kept = min(stable, key=lambda ft: ft.indices.mse)
+    best = sweep.best
+    if best is kept or best.stable:
+        return kept, None
+    return kept, {"alpha": float(best.alpha), "mse": best.indices.mse, "stable": False}
 
 
 def _fit_entry(fit: LevyFit, truth_g: np.ndarray | None, f: np.ndarray) -> dict:
@@ -205,13 +275,16 @@ def estimate_fractional(
     f, G = frf.f_hz, frf.G
     truth_g = truth.response(f) if truth is not None else None
 
-    fits = {}
+    fits, rejected = {}, {}
     for key, structure in PAPER_STRUCTURES.items():
         if structure.alpha is not None:
             fit = levy_fit(f, G, structure)
         else:
-            fit = levy_sweep(f, G, structure, alphas=alpha_grid(frf_cfg.alpha_step)).best
+            fit, rejected[key] = _sweep(f, G, structure, alpha_grid(frf_cfg.alpha_step))
         fits[key] = fit
+    entries = {k: _fit_entry(v, truth_g, f) for k, v in fits.items()}
+    for key, rej in rejected.items():
+        entries[key]["rejected_unstable"] = rej
 
     results = {
         "protocol": trials.attrs.get("protocol", "fractional_elbow"),
@@ -226,7 +299,13 @@ def estimate_fractional(
             "settings": dataclasses.asdict(frf_cfg),
         },
         "fir": {"taps": int(fir.taps.size), "ripple_db": fir.ripple_db, "attenuation_db": fir.attenuation_db},
-        "models": {k: _fit_entry(v, truth_g, f) for k, v in fits.items()},
+        "models": entries,
+        "stability_rule": STABILITY_RULE,
+        "fig4_features": {
+            "measured": bode_features(f, G),
+            "truth": None if truth_g is None else bode_features(f, truth_g),
+            "paper": {k: list(v) for k, v in PAPER_FIG4.items()},
+        },
         "paper_table_I": PAPER_TABLE_I,
         "literature_bandwidth_hz": {name: tf.bandwidth_hz() for name, tf in LITERATURE_MODELS.items()},
     }
@@ -271,6 +350,12 @@ def estimate_fractional(
         tf = truth.five_element
         if truth.fractional_order is None:
             results["five_element_rel_err"] = {n: abs(getattr(fe, n) / getattr(tf, n) - 1) for n in names}
+            if trials.attrs.get("reflex_enabled") and {"f_true", "phi_true"} <= set(trials.channels):
+                eff = _effective_truth(trials, frf_cfg, truth, nfft)
+                results["effective_truth"] = eff
+                results["five_element_rel_err_effective"] = {
+                    n: abs(getattr(fe, n) / eff["five_element"][n] - 1) for n in names
+                }
         else:
             frac = results["fractional_five_element"]
             frac["true_order"] = truth.fractional_order
@@ -292,6 +377,30 @@ def estimate_fractional(
         "time": overlay,
     }
     return results, series
+
+
+def _effective_truth(trials: TrialSet, frf_cfg: FrfConfig, truth: ElbowTruth, nfft: int) -> dict:
+    """The effective truth (reflex included): the arm's admittance from the run's noise-free
+    channels (true grasp force ``f_true`` and elbow angle ``phi_true`` of the same trials), read as
+    K and D by :func:`effective_arm`; M and the grasp are the intrinsic ones."""
+    fs, L = trials.fs_hz, truth.L
+    lo, hi = frf_cfg.band_hz
+    force = trials.channel("f_true")[..., 0] * L  # N·m about the elbow
+    phi = trials.channel("phi_true")[..., 0]
+    per_trial = [
+        estimate_frf(u, y, fs, window_len=frf_cfg.welch_window, overlap=frf_cfg.welch_overlap, nfft=nfft)
+        for u, y in zip(force, phi, strict=True)
+    ]
+    frf = average_responses(per_trial).band(lo, hi)
+    K, D = effective_arm(frf.f_hz, frf.G, truth.I)
+    fe = truth.five_element
+    L2 = L**2
+    return {
+        "label": "effective (reflex included; noise-free f_true, phi_true of the same trials)",
+        "K_Nm_per_rad": K,
+        "D_Nms_per_rad": D,
+        "five_element": {"M": fe.M, "k1": fe.k1, "k2": K / L2, "d1": fe.d1, "d2": D / L2},
+    }
 
 
 def time_overlay(

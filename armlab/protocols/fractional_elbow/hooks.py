@@ -39,7 +39,8 @@ def reestimate(trials: TrialSet, stored, overrides: list[str]) -> dict:
         # the groups this protocol reads (runs made before the per-protocol configs stored them all)
         own = {f.name: stored[f.name] for f in fields(FractionalElbowConfig) if f.name in stored}
         exp = OmegaConf.to_object(OmegaConf.merge(OmegaConf.structured(FractionalElbowConfig), own))
-        truth = elbow_truth(build_direct_drive_scene(exp.elbow, exp.sim), exp.elbow, trials.fs_hz)
+        scene = build_direct_drive_scene(exp.elbow, exp.sim)
+        truth = elbow_truth(scene, exp.elbow, trials.fs_hz, exp.motor.sensed_mass_kg)
     results, _ = estimate_fractional(trials, frf, truth)
     return results
 
