@@ -7,12 +7,15 @@ name (taken from its registered :class:`~armlab.protocols.Protocol`) to its stud
 
 from armlab.reproduction.conditioning import PROTOCOL_NAME as _CONDITIONING
 from armlab.reproduction.conditioning import run_published_conditioning
+from armlab.reproduction.fractional import PROTOCOL_NAME as _FRACTIONAL
+from armlab.reproduction.fractional import run_published_fractional
 from armlab.reproduction.vfs import PROTOCOL_NAME as _VFS
 from armlab.reproduction.vfs import run_published_vfs
 
 __all__ = [
     "STUDIES",
     "run_published_conditioning",
+    "run_published_fractional",
     "run_published_vfs",
 ]
 
@@ -20,4 +23,5 @@ __all__ = [
 STUDIES = {
     _CONDITIONING: run_published_conditioning,
     _VFS: run_published_vfs,
+    _FRACTIONAL: run_published_fractional,
 }

@@ -190,9 +190,7 @@ def bode_features(f_hz: np.ndarray, G: np.ndarray) -> dict:
     }
 
 
-def effective_arm(
-    f_hz: np.ndarray, Y: np.ndarray, inertia: float
-) -> tuple[float, float]:
+def effective_arm(f_hz: np.ndarray, Y: np.ndarray, inertia: float) -> tuple[float, float]:
     """Effective arm stiffness K (N·m/rad) and damping D (N·m·s/rad), reflex included.
 
     ``Y`` is the arm's noise-free admittance ``phi / (F L)`` (rad/(N·m)) measured on the band;
