@@ -171,6 +171,16 @@ def test_diagnosis_is_paired_and_ranked(diagnosis, gap):
         if full is not None and rk is not None:
             assert red["K_pd_lead_ms"] == pytest.approx((full - rk) * 1e3)
     assert diagnosis["before"]["name"] == "before_issue17"
+    # the added effects ranked against the earlier lab and the default
+    added = diagnosis["added_effects"]
+    assert added["before_distance_ms"] == by_name["before_issue17"]["distance_ms"]
+    assert added["after_distance_ms"] == nominal["distance_ms"]
+    (removed,) = added["removed"]
+    assert removed["name"] == "remove_fluctuation"
+    assert removed["change_ms"] == pytest.approx(
+        by_name["remove_fluctuation"]["distance_ms"] - nominal["distance_ms"]
+    )
+    assert verdict["text"].startswith("The added effects bring the distance to the paper from")
 
 
 def test_report_has_every_row_and_the_verdict(diagnosis):
@@ -181,6 +191,7 @@ def test_report_has_every_row_and_the_verdict(diagnosis):
     assert "## Figure by figure: before and after the added effects" in text
     assert "| Fig. 4 (full model) | K positive definite from (ms) | 320 |" in text
     assert "| Fig. 5 vs Fig. 4 | reduced K-PD earlier than full by (ms) |" in text
+    assert "## The added effects, ranked" in text and "| remove_fluctuation |" in text
     for e in diagnosis["variants"]:
         assert f"| {e['name']} |" in text
     assert diagnosis["verdict"]["text"] in text

@@ -65,7 +65,9 @@ def test_effective_truth_is_the_intrinsic_truth_without_reflex():
 
 
 def test_the_same_seed_gives_bit_identical_fluctuating_trials():
-    cfg = ConditioningWindowConfig(scenario=ScenarioConfig(name="conditioning_window", k_values=[1], n_trials=4))
+    cfg = ConditioningWindowConfig(
+        scenario=ScenarioConfig(name="conditioning_window", k_values=[1], n_trials=4)
+    )
     a = simulate_protocol(cfg)[0].trials
     b = simulate_protocol(cfg)[0].trials
     steady = simulate_protocol(replace(cfg, subject=replace(cfg.subject, enabled=False)))[0].trials

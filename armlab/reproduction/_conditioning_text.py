@@ -95,6 +95,20 @@ def format_report(result: dict) -> str:
         lines.append(f"| {_LABEL[c]} | {_ms(paper[c])} | {_ms(g['simulated_s'])} | {g['text']} |")
     lines += ["", f"Nominal distance: {nom['distance_ms']:.0f} ms.", ""]
     lines += _figures(result)
+    if result.get("added_effects"):
+        a = result["added_effects"]
+        lines += [
+            "## The added effects, ranked",
+            "",
+            "Change of the distance to the paper (ms; + = farther) when one effect is removed from the "
+            "default lab, or added to the lab as it was before issue 17.",
+            "",
+            "| variant | distance | change |",
+            "|---|---|---|",
+            *[f"| {r['name']} | {r['distance_ms']:.0f} | {r['change_ms']:+.0f} |" for r in a["removed"]],
+            *[f"| {r['name']} | {r['distance_ms']:.0f} | {r['change_ms']:+.0f} |" for r in a["added"]],
+            "",
+        ]
     lines += [
         "## Single changes, ranked",
         "",

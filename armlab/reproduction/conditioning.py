@@ -239,7 +239,12 @@ def diagnose_thresholds(
         entries.append(entry)
     ranked = rank_variants(entries)
     before = next((e for e in entries if e["name"] == "before_issue17"), None)
+    added = _added_effects(nominal, before, entries)
+    verdict = _verdict(nominal, ranked, measured["windows_s"], len(scored))
+    if added is not None:
+        verdict["text"] = added["text"] + " " + verdict["text"]
     return {
+        "added_effects": added,
         "paper_reduced_K_pd_s": PAPER_REDUCED_K_PD_S,
         "before": before,
         "paper_s": {c: PAPER_THRESHOLDS_S[_PAPER_KEY[c]] for c in CRITERIA},
@@ -250,8 +255,45 @@ def diagnose_thresholds(
         "not_reached_penalty_ms": NOT_REACHED_PENALTY_MS,
         "nominal": nominal,
         "variants": ranked,
-        "verdict": _verdict(nominal, ranked, measured["windows_s"], len(scored)),
+        "verdict": verdict,
         "wall_s": round(time.perf_counter() - t0, 1),
+    }
+
+
+def _added_effects(nominal: dict, before: dict | None, entries: list[dict]) -> dict | None:
+    """Issue 17's added effects ranked: how far removing each from the default moves the thresholds
+    from the paper's, and how far adding each to the earlier lab brings them closer."""
+    if before is None or before["distance_ms"] is None:
+        return None
+    d0, d_before = nominal["distance_ms"], before["distance_ms"]
+
+    def rows(prefix: str, ref: float) -> list[dict]:
+        out = [
+            {
+                "name": e["name"],
+                "distance_ms": e["distance_ms"],
+                "change_ms": round(e["distance_ms"] - ref, 3),
+            }
+            for e in entries
+            if e["name"].startswith(prefix) and e["distance_ms"] is not None
+        ]
+        return sorted(out, key=lambda r: (-abs(r["change_ms"]), r["name"]))
+
+    removed, added = rows("remove_", d0), rows("add_", d_before)
+    text = (
+        f"The added effects bring the distance to the paper from {d_before:.0f} ms (lab before issue 17) "
+        f"to {d0:.0f} ms; removed one at a time from the default: "
+        + ", ".join(f"{r['name'][7:]} {r['change_ms']:+.0f} ms" for r in removed)
+        + "; added one at a time to the earlier lab: "
+        + ", ".join(f"{r['name'][4:]} {r['change_ms']:+.0f} ms" for r in added)
+        + "."
+    )
+    return {
+        "before_distance_ms": d_before,
+        "after_distance_ms": d0,
+        "removed": removed,
+        "added": added,
+        "text": text,
     }
 
 
