@@ -124,7 +124,8 @@ class CuffConfig:
 
     rigid: bool = False
     # Soft tissue + strap compliance of an arm cuff (assumption: interface stiffness of order
-    # 1e4 N/m, the range reported for forearm/hand orthoses and manipulandum handles).
+    # 1e4 N/m, the range reported for forearm/hand orthoses and manipulandum handles). The
+    # conditioning_window lab sets 3 kN/m (measured cuff interfaces, its config.py).
     stiffness_N_per_m: float = 2.0e4
     damping_Ns_per_m: float = 100.0  # N s/m, ~0.3 of critical with ~2 kg endpoint mass (assumption)
     mass_kg: float = 0.6  # kg, plastic cuff + metal support beam (assumption, paper IV-A)
