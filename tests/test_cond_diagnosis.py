@@ -14,6 +14,8 @@ import pytest
 
 from armlab.config.diagnosis import DiagnosisConfig, RefereeConfig
 from armlab.config.effects import EFFECTS
+from armlab.config.schema import CuffConfig
+from armlab.config.subject import SubjectConfig
 from armlab.diagnosis.families import fit_model
 from armlab.diagnosis.scoring import expected_verdict
 from armlab.errors import ConfigError, DataError
@@ -33,11 +35,12 @@ def _cfg(**effects) -> ConditioningWindowConfig:
     return replace(
         base,
         arm=replace(base.arm, muscle="linear"),
-        cuff=replace(base.cuff, rigid=True),
+        cuff=CuffConfig(rigid=True),  # CuffConfig's own damping for the compliant-cuff dataset
         reflex=replace(base.reflex, enabled=False),
         sensors=replace(base.sensors, preset="ideal"),
         scenario=replace(base.scenario, k_values=[26]),
         effects=fx,
+        subject=SubjectConfig(),  # a steady subject: the hidden effects are the only departures
     )
 
 

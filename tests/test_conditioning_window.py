@@ -13,6 +13,7 @@ from armlab.config.schema import (
     ScenarioConfig,
     SensorsConfig,
 )
+from armlab.config.subject import SubjectConfig
 from armlab.errors import ConfigError
 from armlab.protocols.conditioning_window.config import ConditioningWindowConfig
 from armlab.protocols.conditioning_window.experiment import (
@@ -31,13 +32,15 @@ def _run(cfg: ConditioningWindowConfig):
 
 @pytest.fixture(scope="module")
 def exact():
-    # linear muscles (exact linearised truth), rigid cuff, ideal sensors, no reflex, no filter;
-    # 13 trials per window (12 identify: every direction twice) — exact data need few trials
+    # the ideal lab: linear muscles (exact linearised truth), rigid cuff, ideal sensors, no reflex,
+    # a steady subject, no filter; 13 trials per window (12 identify: every direction twice) —
+    # exact data need few trials
     cfg = ConditioningWindowConfig(
         arm=ArmConfig(muscle="linear"),
         cuff=CuffConfig(rigid=True),
         sensors=SensorsConfig(preset="ideal"),
         reflex=ReflexConfig(enabled=False),
+        subject=SubjectConfig(enabled=False),
         estimator=EstimatorConfig(lowpass_hz=None),
         scenario=ScenarioConfig(name="conditioning_window", n_trials=13),
     )
@@ -74,8 +77,14 @@ def test_ground_truth_is_consistent_with_the_model(exact):
 
 @pytest.fixture(scope="module")
 def noisy_pair():
-    # default (realistic) sensors, Hill muscles, compliant cuff; reflex off and on
-    base = {"scenario": ScenarioConfig(name="conditioning_window", k_values=[26])}
+    # the sensor chain alone: realistic sensors, Hill muscles, the stiff 20 kN/m cuff of
+    # CuffConfig and a steady subject (the default lab's soft tissue and activation fluctuation
+    # are pinned against the paper in test_conditioning_fidelity.py); reflex off and on
+    base = {
+        "scenario": ScenarioConfig(name="conditioning_window", k_values=[26]),
+        "cuff": CuffConfig(),
+        "subject": SubjectConfig(enabled=False),
+    }
     off = _run(ConditioningWindowConfig(reflex=ReflexConfig(enabled=False), **base))[1]
     on = _run(ConditioningWindowConfig(**base))[1]
     return off, on

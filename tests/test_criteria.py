@@ -151,3 +151,17 @@ def test_public_api_resolves():
     # smoothing.differentiate is exported as sg_differentiate (processing.differentiate keeps the name)
     assert set().union(*(m.__all__ for m in modules)) | {"sg_differentiate"} == set(est.__all__)
     assert est.sg_differentiate is sm.differentiate and est.differentiate is proc.differentiate
+
+
+def test_quasi_constant_flags_per_second_of_window():
+    # windows 10 ms apart, then a 50 ms extension step; every step changes the parameter by 4 %
+    # of its norm. Per step (tol 0.05) all pass; per second (tol 5/s: 5 % per 10 ms, 25 % per
+    # 50 ms) the 10 ms steps pass too; at 2/s (2 % per 10 ms) only the 50 ms step (allowed 10 %)
+    # passes, i.e. a step is judged by its change per unit of T_obs, not per window
+    t = np.array([0.35, 0.36, 0.37, 0.42])
+    p = np.array([[1.0], [1.04], [1.0816], [1.124864]])
+    assert quasi_constant_flags(p, tol=0.05).all()
+    assert quasi_constant_flags(p, tol=5.0, t_obs=t).all()
+    assert quasi_constant_flags(p, tol=2.0, t_obs=t).tolist() == [False, False, True, True]
+    with pytest.raises(DataError, match="strictly increasing"):
+        quasi_constant_flags(p, tol=5.0, t_obs=t[::-1])

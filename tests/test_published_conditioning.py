@@ -29,10 +29,15 @@ def gap(cfg):
 @pytest.fixture(scope="module")
 def diagnosis(cfg):
     catalogue = {v.name: v for v in pc.candidate_variants(cfg)}
+    catalogue.update({v.name: v for v in pc.effect_variants(cfg)})
     variants = [
-        # two variants that move the thresholds in opposite directions (quick mode, summed
-        # distance to the paper's: 190 ms with reflexes off, 250 nominal, 370 with a rigid cuff)
-        catalogue["reflex_off"],
+        # variants that move the thresholds in opposite directions. Quick mode (7 trials per
+        # window) is not the paper's protocol: with 6 identification trials the subject's
+        # fluctuation keeps K, D skew, so the nominal never reaches symmetry; summed distances to
+        # the paper's: 250 ms for the lab before issue 17, 290 without the fluctuation, 510
+        # nominal, 630 with a rigid cuff. The order checks the ranking, not the physics.
+        catalogue["before_issue17"],
+        catalogue["remove_fluctuation"],
         catalogue["cuff_rigid"],
         # not physical: the protocol is simulated again with the same seed, so must repeat nominal
         pc.Variant(name="repeat", effect="none", description="same physics, no table",
@@ -61,8 +66,12 @@ def test_threshold_gap_reports_the_published_values(gap):
     assert paper["K_pd"] == PAPER_THRESHOLDS_S["K_pd_after_s"]
     for c in pc.CRITERIA:
         g = gap["criteria"][c]
-        assert g["reached"], c  # the nominal lab reaches all three within the quick windows
-        assert g["gap_ms"] == pytest.approx((g["simulated_s"] - g["paper_s"]) * 1e3)
+        assert g["reached"] == (g["simulated_s"] is not None), c
+        if g["reached"]:
+            assert g["gap_ms"] == pytest.approx((g["simulated_s"] - g["paper_s"]) * 1e3)
+        else:
+            assert g["gap_ms"] is None and "not reached" in g["text"]
+    assert gap["criteria"]["K_pd"]["reached"]  # K turns positive definite within the quick windows
 
 
 def test_distance_sums_scored_gaps_and_penalises_unreached():
@@ -82,6 +91,22 @@ def test_ranking_puts_the_smallest_distance_first_and_failures_last():
         {"name": "exact", "distance_ms": 0.0},
     ]
     assert [e["name"] for e in pc.rank_variants(entries)] == ["exact", "a", "z", "b", "failed"]
+
+
+def test_added_effect_variants_remove_and_add_one_effect_each(cfg):
+    variants = {v.name: v for v in pc.effect_variants(cfg)}
+    before = variants["before_issue17"].apply(cfg)
+    assert before.cuff.stiffness_N_per_m == 2.0e4 and not before.subject.enabled
+    assert before.estimator.xi_source == "truth" and before.estimator.constancy_tol_per_s is None
+    # removing one effect changes only that effect
+    assert variants["remove_fluctuation"].apply(cfg).subject.fluctuation_cv == 0.0
+    assert variants["remove_fluctuation"].apply(cfg).cuff == cfg.cuff
+    assert variants["remove_soft_tissue"].apply(cfg).subject == cfg.subject
+    # adding one effect to the earlier lab keeps the rest of that lab
+    tissue = variants["add_soft_tissue"].apply(cfg)
+    assert tissue.cuff == cfg.cuff and not tissue.subject.enabled
+    fluct = variants["add_fluctuation"].apply(cfg)
+    assert fluct.subject.active and fluct.subject.trial_cv == 0.0 and fluct.cuff == before.cuff
 
 
 def test_variants_change_the_config_as_documented(cfg):
@@ -129,21 +154,44 @@ def test_diagnosis_is_paired_and_ranked(diagnosis, gap):
     by_name = {e["name"]: e for e in diagnosis["variants"]}
     assert by_name["repeat"]["criteria"] == nominal["criteria"]  # re-simulated: deterministic
     assert by_name["repeat"]["shrink_ms"] == 0.0
-    # ranked by distance: reflexes off closer than the nominal, a rigid cuff farther
-    assert [e["name"] for e in diagnosis["variants"]] == ["reflex_off", "repeat", "cuff_rigid"]
+    # ranked by distance (quick mode, see the fixture)
+    names = [e["name"] for e in diagnosis["variants"]]
+    assert names == ["before_issue17", "remove_fluctuation", "repeat", "cuff_rigid"]
     distances = [e["distance_ms"] for e in diagnosis["variants"]]
-    assert distances[0] < nominal["distance_ms"] < distances[2]
+    assert distances[0] < distances[1] < nominal["distance_ms"] < distances[3]
     for e in diagnosis["variants"]:
         assert e["error"] is None
         assert e["shrink_ms"] == pytest.approx(nominal["distance_ms"] - e["distance_ms"])
     verdict = diagnosis["verdict"]
-    assert verdict["best"] == "reflex_off" and verdict["best_distance_ms"] == distances[0]
+    assert verdict["best"] == "before_issue17" and verdict["best_distance_ms"] == distances[0]
+    # Fig. 5 check beside every entry: the reduced model's thresholds and its lead on K-PD
+    for e in [nominal, *diagnosis["variants"]]:
+        red = e["reduced"]
+        full, rk = e["criteria"]["K_pd"]["simulated_s"], red["thresholds_s"]["K_pd"]
+        if full is not None and rk is not None:
+            assert red["K_pd_lead_ms"] == pytest.approx((full - rk) * 1e3)
+    assert diagnosis["before"]["name"] == "before_issue17"
+    # the added effects ranked against the earlier lab and the default
+    added = diagnosis["added_effects"]
+    assert added["before_distance_ms"] == by_name["before_issue17"]["distance_ms"]
+    assert added["after_distance_ms"] == nominal["distance_ms"]
+    (removed,) = added["removed"]
+    assert removed["name"] == "remove_fluctuation"
+    assert removed["change_ms"] == pytest.approx(
+        by_name["remove_fluctuation"]["distance_ms"] - nominal["distance_ms"]
+    )
+    assert verdict["text"].startswith("The added effects bring the distance to the paper from")
 
 
 def test_report_has_every_row_and_the_verdict(diagnosis):
     text = pc.format_report(diagnosis)
     assert text.startswith("# Published conditioning thresholds")
     assert "| K positive definite | 320 |" in text
+    # figure by figure, before and after the added effects
+    assert "## Figure by figure: before and after the added effects" in text
+    assert "| Fig. 4 (full model) | K positive definite from (ms) | 320 |" in text
+    assert "| Fig. 5 vs Fig. 4 | reduced K-PD earlier than full by (ms) |" in text
+    assert "## The added effects, ranked" in text and "| remove_fluctuation |" in text
     for e in diagnosis["variants"]:
         assert f"| {e['name']} |" in text
     assert diagnosis["verdict"]["text"] in text

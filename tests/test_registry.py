@@ -99,7 +99,7 @@ def test_foreign_group_on_the_command_line_names_the_protocols_groups(capsys, tm
     assert main(args) == 2
     err = capsys.readouterr().err
     assert "'frf' is not read by protocol 'conditioning_window'; its groups: ['sim', 'sensors'" in err
-    assert "'estimator']" in err and not (tmp_path / "r").exists()
+    assert "'estimator', 'subject']" in err and not (tmp_path / "r").exists()
 
 
 @pytest.mark.parametrize(
@@ -107,6 +107,7 @@ def test_foreign_group_on_the_command_line_names_the_protocols_groups(capsys, tm
     [
         ("conditioning_window", "reflex", "reflex.enabled"),
         ("conditioning_window", "cuff_compliance", "cuff.rigid"),
+        ("conditioning_window", "cocontraction_variation", "subject.enabled"),
         ("virtual_force_sensor", "cable_drag", "capstan.drag"),
     ],
 )

@@ -20,6 +20,7 @@ from armlab.config.store import (
     available_options,
     to_experiment,
 )
+from armlab.config.subject import SubjectConfig
 
 __all__ = [
     "ArmConfig",
@@ -36,6 +37,7 @@ __all__ = [
     "ScenarioConfig",
     "SensorsConfig",
     "SimConfig",
+    "SubjectConfig",
     "available_options",
     "to_experiment",
 ]

@@ -124,7 +124,8 @@ class CuffConfig:
 
     rigid: bool = False
     # Soft tissue + strap compliance of an arm cuff (assumption: interface stiffness of order
-    # 1e4 N/m, the range reported for forearm/hand orthoses and manipulandum handles).
+    # 1e4 N/m, the range reported for forearm/hand orthoses and manipulandum handles). The
+    # conditioning_window lab sets 3 kN/m (measured cuff interfaces, its config.py).
     stiffness_N_per_m: float = 2.0e4
     damping_Ns_per_m: float = 100.0  # N s/m, ~0.3 of critical with ~2 kg endpoint mass (assumption)
     mass_kg: float = 0.6  # kg, plastic cuff + metal support beam (assumption, paper IV-A)
@@ -205,9 +206,15 @@ class EstimatorConfig:
     lowpass_hz: float | None = 20.0
     filter_order: int = 4
     baseline_s: float = 0.2  # s, pre-onset span averaged for q0 and tau0 (paper IV-C)
-    xi_source: XiSource = "truth"  # known xi for the reduced model: model truth or the paper's values
+    # known xi for the reduced model: model truth, the paper's values, or "full_fit": the full
+    # model's xi in the longest window of the same data (paper IV-D: xi "obtained from the full
+    # dynamic model identification")
+    xi_source: XiSource = "truth"
     symmetry_tol: float = 0.1  # quasi-symmetric when ||A - A^T||_F / ||A + A^T||_F below this
     constancy_tol: float = 0.05  # quasi-constant when relative change to next window below this
+    # 1/s; set: quasi-constant when the relative change to the next window, per second of T_obs,
+    # is below this (replaces the per-step constancy_tol; windows need not be evenly spaced)
+    constancy_tol_per_s: float | None = None
     t_obs_s: list[float] | None = None  # explicit windows; None = T_k + 70 ms per scenario window
 
     def __post_init__(self) -> None:
@@ -224,6 +231,12 @@ class EstimatorConfig:
             0 < self.constancy_tol < 1,
             f"estimator.constancy_tol must lie in (0, 1), got {self.constancy_tol}",
         )
+        if self.constancy_tol_per_s is not None:
+            check(
+                0 < self.constancy_tol_per_s < 100,
+                "estimator.constancy_tol_per_s must lie in (0, 100) 1/s or be null, got "
+                f"{self.constancy_tol_per_s}",
+            )
         if self.t_obs_s is not None:
             bad = [t for t in self.t_obs_s if not (math.isfinite(t) and t > 0)]
             check(not bad, f"estimator.t_obs_s must hold positive times in s, got {bad}")

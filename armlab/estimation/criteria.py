@@ -162,6 +162,7 @@ def quasi_constant_flags(
     tol: float,
     blocks: Sequence[slice] | None = None,
     floor: float = 1e-12,
+    t_obs: np.ndarray | None = None,
 ) -> np.ndarray:
     """Quasi-constancy of the parameters over the observation window (Sec. IV-D of the conditioning paper).
 
@@ -179,6 +180,10 @@ def quasi_constant_flags(
         blocks: index slices of the blocks; default xi/D/K for c = 11 (Eq. (10)), D/K for c = 8
             (Eq. (23)) and a single block otherwise.
         floor: lower bound of a block norm, avoiding division by zero.
+        t_obs: (n_windows,) s, strictly increasing window lengths. Given, ``tol`` is a rate per
+            second of window: the allowed change to the next window is ``tol · (t[k+1] - t[k])``
+            times the block norm, so unevenly spaced windows (10 ms steps, then 30-50 ms
+            extension steps) are judged alike. None: ``tol`` per step, as above.
 
     Returns:
         (n_windows,) bool.
@@ -198,7 +203,13 @@ def quasi_constant_flags(
         scale[:, b] = np.maximum(np.linalg.norm(p[:, b], axis=1), floor)[:, None]
     if p.shape[0] == 1:
         return np.zeros(1, bool)
-    ok = np.all(np.abs(np.diff(p, axis=0)) <= tol * scale[:-1], axis=1)
+    step = np.ones(p.shape[0] - 1)
+    if t_obs is not None:
+        t = np.asarray(t_obs, dtype=float)
+        if t.shape != (p.shape[0],) or np.any(np.diff(t) <= 0):
+            raise DataError(f"t_obs must be ({p.shape[0]},) strictly increasing, got {t.tolist()}")
+        step = np.diff(t)
+    ok = np.all(np.abs(np.diff(p, axis=0)) <= tol * step[:, None] * scale[:-1], axis=1)
     return np.append(ok, ok[-1])
 
 

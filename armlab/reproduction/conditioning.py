@@ -47,15 +47,19 @@ from armlab.protocols.conditioning_window.experiment import (
     window_specs,
 )
 from armlab.reproduction._conditioning_text import CRITERIA, format_report
+from armlab.reproduction.conditioning_effects import effect_variants
 from armlab.reproduction.variants import Variant, candidate_variants
 
 __all__ = [
     "PROTOCOL_NAME",
     "CRITERIA",
     "NOT_REACHED_PENALTY_MS",
+    "PAPER_REDUCED_K_PD_S",
+    "REDUCED_LEAD_MIN_MS",
     "SCORED_CRITERIA",
     "Variant",
     "candidate_variants",
+    "effect_variants",
     "diagnose_thresholds",
     "distance_ms",
     "format_report",
@@ -70,6 +74,11 @@ PROTOCOL_NAME = PROTOCOL.name
 _SIM_KEY = {"K_pd": "K_pd_from_s", "symmetric": "symmetric_from_s", "constant": "constant_from_s"}
 _PAPER_KEY = {"K_pd": "K_pd_after_s", "symmetric": "symmetric_after_s", "constant": "constant_after_s"}
 SCORED_CRITERIA = ("K_pd", "symmetric")
+# s, section V: the window "can be reduced to about 300 ms when the inertial parameters are known"
+# (Fig. 5, reduced model); a check, never scored
+PAPER_REDUCED_K_PD_S = 0.30
+# ms, the issue's check: the reduced model positive definite at least this much before the full
+REDUCED_LEAD_MIN_MS = 30.0
 # ms, score of a criterion never reached: above the largest in-grid gap (windows 120-500 ms against
 # paper values 320-400 ms: at most 380 ms), so reaching a criterion always beats missing it
 NOT_REACHED_PENALTY_MS = 500.0
@@ -99,11 +108,14 @@ def _measure(cfg: ConditioningWindowConfig, recorded=None) -> tuple[dict, tuple]
     rec, scenario = recorded if recorded is not None else simulate_protocol(cfg)
     specs = window_specs(scenario, cfg.estimator)
     results, _ = estimate_protocol(rec.trials, cfg.estimator, specs)
-    full = results["criteria"]["full"]
+    full, red = results["criteria"]["full"], results["criteria"]["reduced"]
+    last = results["windows"][max(i for i, s in enumerate(specs) if not s.extension)]
     out = {
         "thresholds_s": {
             c: None if full[_SIM_KEY[c]] is None else round(full[_SIM_KEY[c]], 6) for c in CRITERIA
         },
+        "reduced_s": {c: None if red[_SIM_KEY[c]] is None else round(red[_SIM_KEY[c]], 6) for c in CRITERIA},
+        "K_longest_paper_window": last["K"],
         "windows_s": [round(s.t_obs_s, 6) for s in specs],
         "wall_s": round(time.perf_counter() - t0, 2),
     }
@@ -124,6 +136,17 @@ def _gap(thresholds_s: dict, windows_s: list[float]) -> dict:
         text = f"from {sim * 1e3:.0f} ms vs paper {paper * 1e3:.0f} ms: {abs(gap):.0f} ms {word}"
         out[c] = {"paper_s": paper, "simulated_s": sim, "gap_ms": gap, "reached": True, "text": text}
     return out
+
+
+def _reduced(measured: dict) -> dict:
+    """Fig. 5 check: the reduced model's thresholds and how much earlier it is positive definite."""
+    full, red = measured["thresholds_s"]["K_pd"], measured["reduced_s"]["K_pd"]
+    lead = None if full is None or red is None else round((full - red) * 1e3, 3)
+    return {
+        "thresholds_s": measured["reduced_s"],
+        "K_pd_lead_ms": lead,
+        "K_longest_paper_window": measured["K_longest_paper_window"],
+    }
 
 
 def distance_ms(gap: dict, scored: tuple[str, ...] = SCORED_CRITERIA) -> float:
@@ -179,12 +202,13 @@ def diagnose_thresholds(
         (name, effect, description, criteria, distance_ms, shrink_ms, wall_s, error), "verdict"}``.
     """
     cfg = _checked(cfg, quick)
-    variants = candidate_variants(cfg) if variants is None else variants
+    variants = effect_variants(cfg) + candidate_variants(cfg) if variants is None else variants
     configs = [v.apply(cfg) for v in variants]  # config errors surface before any simulation
     t0 = time.perf_counter()
     measured, recorded = _measure(cfg)
     nominal = {
         "criteria": _gap(measured["thresholds_s"], measured["windows_s"]),
+        "reduced": _reduced(measured),
         "wall_s": measured["wall_s"],
     }
     nominal["distance_ms"] = distance_ms(nominal["criteria"], scored)
@@ -195,6 +219,7 @@ def diagnose_thresholds(
             "effect": v.effect,
             "description": v.description,
             "criteria": None,
+            "reduced": None,
             "distance_ms": None,
             "shrink_ms": None,
             "wall_s": None,
@@ -207,12 +232,21 @@ def diagnose_thresholds(
             entry["error"] = f"{type(exc).__name__}: {exc}"
         else:
             entry["criteria"] = _gap(m["thresholds_s"], m["windows_s"])
+            entry["reduced"] = _reduced(m)
             entry["distance_ms"] = distance_ms(entry["criteria"], scored)
             entry["shrink_ms"] = round(nominal["distance_ms"] - entry["distance_ms"], 3)
             entry["wall_s"] = m["wall_s"]
         entries.append(entry)
     ranked = rank_variants(entries)
+    before = next((e for e in entries if e["name"] == "before_issue17"), None)
+    added = _added_effects(nominal, before, entries)
+    verdict = _verdict(nominal, ranked, measured["windows_s"], len(scored))
+    if added is not None:
+        verdict["text"] = added["text"] + " " + verdict["text"]
     return {
+        "added_effects": added,
+        "paper_reduced_K_pd_s": PAPER_REDUCED_K_PD_S,
+        "before": before,
         "paper_s": {c: PAPER_THRESHOLDS_S[_PAPER_KEY[c]] for c in CRITERIA},
         "seed": cfg.seed,
         "quick": quick,
@@ -221,8 +255,45 @@ def diagnose_thresholds(
         "not_reached_penalty_ms": NOT_REACHED_PENALTY_MS,
         "nominal": nominal,
         "variants": ranked,
-        "verdict": _verdict(nominal, ranked, measured["windows_s"], len(scored)),
+        "verdict": verdict,
         "wall_s": round(time.perf_counter() - t0, 1),
+    }
+
+
+def _added_effects(nominal: dict, before: dict | None, entries: list[dict]) -> dict | None:
+    """Issue 17's added effects ranked: how far removing each from the default moves the thresholds
+    from the paper's, and how far adding each to the earlier lab brings them closer."""
+    if before is None or before["distance_ms"] is None:
+        return None
+    d0, d_before = nominal["distance_ms"], before["distance_ms"]
+
+    def rows(prefix: str, ref: float) -> list[dict]:
+        out = [
+            {
+                "name": e["name"],
+                "distance_ms": e["distance_ms"],
+                "change_ms": round(e["distance_ms"] - ref, 3),
+            }
+            for e in entries
+            if e["name"].startswith(prefix) and e["distance_ms"] is not None
+        ]
+        return sorted(out, key=lambda r: (-abs(r["change_ms"]), r["name"]))
+
+    removed, added = rows("remove_", d0), rows("add_", d_before)
+    text = (
+        f"The added effects bring the distance to the paper from {d_before:.0f} ms (lab before issue 17) "
+        f"to {d0:.0f} ms; removed one at a time from the default: "
+        + ", ".join(f"{r['name'][7:]} {r['change_ms']:+.0f} ms" for r in removed)
+        + "; added one at a time to the earlier lab: "
+        + ", ".join(f"{r['name'][4:]} {r['change_ms']:+.0f} ms" for r in added)
+        + "."
+    )
+    return {
+        "before_distance_ms": d_before,
+        "after_distance_ms": d0,
+        "removed": removed,
+        "added": added,
+        "text": text,
     }
 
 

@@ -29,7 +29,7 @@ __all__ = [
 # s, short-latency stretch reflex 25-50 ms (conditioning paper II-B); the nominal is 35 ms
 STRETCH_LATENCIES_S = (0.025, 0.050)
 REFLEX_GAIN_FACTOR = 2.0  # on the assumed reflex gains of ReflexConfig (assumption: a doubling)
-CUFF_STIFFNESS_FACTORS = (0.5, 2.0)  # on the assumed 2e4 N/m of CuffConfig (order-of-magnitude range)
+CUFF_STIFFNESS_FACTORS = (0.5, 2.0)  # on the configured cuff stiffness (conditioning default 3 kN/m)
 COCONTRACTION_FACTORS = (0.5, 2.0)  # on the nominal activation 0.2 of ArmConfig (assumption)
 LOWPASS_ALT_HZ = 40.0  # Hz, the alternative cutoff named in EstimatorConfig (paper IV-C gives none)
 

@@ -20,8 +20,10 @@ from armlab.sim.rollout import (
     SimResult,
     simulate,
 )
+from armlab.sim.subject import activation_commands
 
 __all__ = [
+    "activation_commands",
     "simulate_force_trial",
     "ForceTrial",
     "HoldState",

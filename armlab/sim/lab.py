@@ -15,6 +15,7 @@ from scipy.interpolate import CubicSpline
 
 from armlab.config.effects import EffectsConfig, enabled_effects
 from armlab.config.schema import ExperimentConfig
+from armlab.config.subject import SubjectConfig
 from armlab.errors import ConfigError
 from armlab.models.ground_truth import GroundTruth, ground_truth
 from armlab.models.robot_fk import RobotKinematics
@@ -26,6 +27,7 @@ from armlab.sensors.presets import SensorSuite, measure
 from armlab.sim.hold import HoldState, hand_world, settle
 from armlab.sim.robot_ik import solve_ik
 from armlab.sim.rollout import simulate
+from armlab.sim.subject import activation_commands
 
 __all__ = [
     "LAB_EFFECTS",
@@ -118,7 +120,12 @@ def robot_targets(
 
 
 def record_trials(
-    cfg: ExperimentConfig, scenario: Scenario, plan: TrialPlan, rng: np.random.Generator
+    cfg: ExperimentConfig,
+    scenario: Scenario,
+    plan: TrialPlan,
+    rng: np.random.Generator,
+    subject: SubjectConfig | None = None,
+    subject_rng: np.random.Generator | None = None,
 ) -> LabRecording:
     """Simulate and record every trial of ``plan``.
 
@@ -127,6 +134,8 @@ def record_trials(
         scenario: the perturbation timeline (record length, pre-onset hold).
         plan: the concrete trials.
         rng: generator for the sensor noise (the plan was drawn before).
+        subject: the subject's activation fluctuation; None or inactive: an ideal subject.
+        subject_rng: generator of that fluctuation (needed when ``subject`` is active).
     """
     other = [n for n in enabled_effects(cfg.effects) if n not in LAB_EFFECTS]
     if other:
@@ -153,7 +162,14 @@ def record_trials(
     # step clock; the perturbation starts at sample `onset`, so at (onset + 1) / fs
     t_rel = (np.arange(n_steps) + 1) * dt - (onset + 1) / fs
     targets = robot_targets(scene, hold, np.asarray(cfg.arm.q0, float), plan, scenario.directions_rad, t_rel)
-    sim = simulate(scene, hold.state, targets, hold.activation, cfg.reflex, substeps=substeps)
+    muscle_base = hold.activation
+    if subject is not None and subject.active:
+        if subject_rng is None:
+            raise ConfigError("an active subject fluctuation needs its own generator (subject_rng)")
+        muscle_base = activation_commands(
+            hold.activation, subject, plan.n_trials, n_steps, substeps, fs, subject_rng
+        )
+    sim = simulate(scene, hold.state, targets, muscle_base, cfg.reflex, substeps=substeps)
 
     sd = sim.sensordata
     clean = {

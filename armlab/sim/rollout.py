@@ -17,6 +17,7 @@ import numpy as np
 from mujoco import rollout as mj_rollout
 
 from armlab.config.schema import ReflexConfig
+from armlab.errors import SimulationError
 from armlab.models.scene import MUSCLES, Scene
 
 __all__ = [
@@ -92,7 +93,9 @@ def simulate(
         scene: the composed scene.
         initial_state: (nstate,) full-physics state every trial starts from.
         robot_targets: (n_trials, n_steps, 7) rad robot joint targets at every physics step.
-        muscle_base: (6,) activation commands without reflex.
+        muscle_base: (6,) activation commands without reflex, or (n_trials, n_steps, 6) per trial
+            and physics step (a subject whose activation fluctuates, see
+            :mod:`armlab.sim.subject`).
         reflex: reflex pathways (``enabled=False`` for none).
         substeps: physics steps per recorded sample.
         nthread: rollout threads (default: all cores).
@@ -102,6 +105,13 @@ def simulate(
     """
     model = scene.model
     n_trials, n_steps, _ = robot_targets.shape
+    muscle_base = np.asarray(muscle_base, float)
+    per_step = muscle_base.ndim == 3
+    if per_step and muscle_base.shape != (n_trials, n_steps, len(MUSCLES)):
+        raise SimulationError(
+            f"muscle_base must be ({len(MUSCLES)},) or {(n_trials, n_steps, len(MUSCLES))}, "
+            f"got {muscle_base.shape}"
+        )
     dt = model.opt.timestep
     if reflex.enabled:
         lag_s = int(round(reflex.stretch_latency_s / dt))
@@ -141,6 +151,7 @@ def simulate(
             m = c1 - c0
             ctrl = np.zeros((n_trials, m, model.nu))
             ctrl[:, :, scene.robot_act] = robot_targets[:, c0:c1]
+            base = muscle_base[:, c0:c1] if per_step else muscle_base
             if reflex.enabled:
                 idx = np.arange(c0, c1)
                 lagged = []
@@ -152,14 +163,14 @@ def simulate(
                     vel = np.where(valid[None, :, None], hist_vel[:, jl], 0.0)
                     lagged.append((length, vel))
                 u = reflex_command(
-                    muscle_base,
+                    base,
                     np.stack([lagged[0][0], lagged[1][0]]),
                     np.stack([lagged[0][1], lagged[1][1]]),
                     ref_len,
                     reflex,
                 )
             else:
-                u = np.broadcast_to(muscle_base, (n_trials, m, len(MUSCLES)))
+                u = np.broadcast_to(base, (n_trials, m, len(MUSCLES)))
             ctrl[:, :, scene.muscle_act] = u
             states, sd = runner.rollout(model, data, state, ctrl, nstep=m)
             state = states[:, -1]

@@ -32,7 +32,11 @@ PROTOCOL = Protocol(
     outputs=hooks.outputs,
     format_table=hooks.format_table,
     effects=LAB_EFFECTS,
-    lab_effects={"reflex": "reflex.enabled", "cuff_compliance": "cuff.rigid"},
+    lab_effects={
+        "reflex": "reflex.enabled",
+        "cuff_compliance": "cuff.rigid",
+        "cocontraction_variation": "subject.enabled",
+    },
     examples=(
         "run protocol=conditioning_window seed=3 arm=planar_linear reflex.enabled=false",
         "run --multirun protocol=conditioning_window seed=0,1,2 hydra/launcher=joblib",

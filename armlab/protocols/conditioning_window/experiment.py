@@ -100,9 +100,11 @@ class ConditioningRecording:
 def simulate_protocol(cfg: ConditioningWindowConfig) -> tuple[ConditioningRecording, Scenario]:
     """Draw the seeded trial plan and record every trial in the simulated lab."""
     scenario = load_scenario(cfg.scenario.name).subset(cfg.scenario.k_values, cfg.scenario.n_trials)
-    plan_rng, sensor_rng = np.random.default_rng(cfg.seed).spawn(2)
+    # the third child feeds the subject's fluctuation; the first two are those of a 2-way spawn,
+    # so an ideal subject draws exactly the plan and sensor noise it always did
+    plan_rng, sensor_rng, subject_rng = np.random.default_rng(cfg.seed).spawn(3)
     plan = draw_trials(scenario, plan_rng)
-    rec = record_trials(cfg, scenario, plan, sensor_rng)
+    rec = record_trials(cfg, scenario, plan, sensor_rng, cfg.subject, subject_rng)
     trials = TrialSet(
         fs_hz=rec.fs_hz,
         onset_index=rec.onset_index,
@@ -173,7 +175,10 @@ def _criteria(t_obs: np.ndarray, ests: list[LSEstimate], cfg: EstimatorConfig) -
         ]
     )
     params = np.stack([e.zeta for e in ests])
-    const = criteria.quasi_constant_flags(params, cfg.constancy_tol)
+    if cfg.constancy_tol_per_s is None:  # per window step (the windows' spacing ignored)
+        const = criteria.quasi_constant_flags(params, cfg.constancy_tol)
+    else:  # per second of T_obs: 10 ms steps and 30-50 ms extension steps judged alike
+        const = criteria.quasi_constant_flags(params, cfg.constancy_tol_per_s, t_obs=t_obs)
     return {
         "K_pd_from_s": criteria.first_satisfied(t_obs, pd),
         "symmetric_from_s": criteria.first_satisfied(t_obs, sym),
@@ -216,8 +221,13 @@ def estimate_protocol(
     held_out = np.asarray(trials.trial_meta["validate"], bool)
     masks = np.stack([(group == s.k) & ~held_out for s in specs])
     truth = trials.attrs.get("ground_truth")
-    xi_known = PAPER_XI if (estimator.xi_source == "paper" or truth is None) else np.asarray(truth["xi"])
     full = estimate_windows(signals, masks, samples)
+    if estimator.xi_source == "full_fit":  # paper IV-D: xi from the full identification
+        xi_known = np.asarray(full[int(np.argmax(samples))].xi, float)
+    elif estimator.xi_source == "paper" or truth is None:
+        xi_known = PAPER_XI
+    else:
+        xi_known = np.asarray(truth["xi"])
     reduced = estimate_windows(signals, masks, samples, xi_known=xi_known)
 
     windows = []
@@ -255,6 +265,12 @@ def estimate_protocol(
         "seed": trials.attrs.get("seed"),
         "ground_truth": truth,
         "paper": dict(PAPER_THRESHOLDS_S),
+        "tolerances": {
+            "symmetry_tol": estimator.symmetry_tol,
+            "constancy_tol": estimator.constancy_tol,
+            "constancy_tol_per_s": estimator.constancy_tol_per_s,
+        },
+        "xi_source": estimator.xi_source,
         "criteria": {
             "full": _criteria(t_obs, full, estimator),
             "reduced": _criteria(t_obs, reduced, estimator),
@@ -269,8 +285,8 @@ def linearisation_bias(cfg: ConditioningWindowConfig) -> dict:
 
     The run's arm (muscle variant, co-contraction, pre-load) and trial plan are simulated again
     with everything else that could bias the estimate removed: rigid cuff, ideal sensors, no
-    reflex, no low-pass filter. What error remains in the longest paper window is the bias of
-    linearising the muscles (plus MuJoCo's integration error, ~0.3 % on the linear variant):
+    reflex, a steady subject, no low-pass filter. What error remains in the longest paper window
+    is the bias of linearising the muscles (plus MuJoCo's integration error, ~0.3 % on the linear variant):
     the Hill muscle's force-length-velocity curves are not linear over the 0.05 rad perturbation.
 
     Args:
@@ -285,6 +301,7 @@ def linearisation_bias(cfg: ConditioningWindowConfig) -> dict:
         cuff=replace(cfg.cuff, rigid=True),
         reflex=replace(cfg.reflex, enabled=False),
         sensors=replace(cfg.sensors, preset="ideal"),
+        subject=replace(cfg.subject, enabled=False),
         estimator=replace(cfg.estimator, lowpass_hz=None, t_obs_s=None),
         scenario=replace(cfg.scenario, k_values=[int(scenario.k_values[-1])]),
     )
@@ -294,7 +311,7 @@ def linearisation_bias(cfg: ConditioningWindowConfig) -> dict:
     w = results["windows"][-1]
     return {
         "muscle": cfg.arm.muscle,
-        "conditions": "rigid cuff, ideal sensors, reflex off, no low-pass filter",
+        "conditions": "rigid cuff, ideal sensors, reflex off, steady subject, no low-pass filter",
         "k": w["k"],
         "t_obs_s": w["t_obs_s"],
         "K": w["K"],

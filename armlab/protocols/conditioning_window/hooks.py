@@ -16,6 +16,7 @@ from armlab.protocols.conditioning_window.experiment import (
     simulate_protocol,
     window_specs,
 )
+from armlab.protocols.conditioning_window.truths import effective_truth, score_truths
 
 __all__ = ["format_table", "outputs", "reestimate", "simulate"]
 
@@ -25,7 +26,9 @@ def simulate(cfg: ConditioningWindowConfig) -> Simulated:
     rec, scenario = simulate_protocol(cfg)
 
     def estimate() -> tuple[dict, dict]:
-        results, series = estimate_protocol(rec.trials, cfg.estimator, window_specs(scenario, cfg.estimator))
+        specs = window_specs(scenario, cfg.estimator)
+        results, series = estimate_protocol(rec.trials, cfg.estimator, specs)
+        score_truths(results, effective_truth(cfg, rec.trials, scenario, specs))
         results["linearisation_bias"] = linearisation_bias(cfg)
         return results, series
 
@@ -60,29 +63,54 @@ def _fmt(x) -> str:
     return "  -  " if x is None else f"{x * 1000:.0f} ms"
 
 
+def _pct(entry: dict, key: str, width: int = 6) -> str:
+    x = entry.get(key)
+    return f"{'-':>{width}}" if x is None else f"{x * 100:{width - 1}.1f}%"
+
+
 def format_table(results: dict, viz=None) -> str:
-    """The window sweep as text: per window the conditioning, K eigenvalues, errors and VAF."""
+    """The window sweep as text: per window the conditioning, K eigenvalues, errors and VAF.
+
+    Errors are relative (Frobenius) against two labelled truths: ``int`` the intrinsic truth
+    (muscles linearised, activations frozen), ``eff`` the effective truth (the same plan in an
+    ideal lab with the reflexes acting; see :mod:`~armlab.protocols.conditioning_window.truths`).
+    """
     lines = [
-        "T_obs  k  ext |   cond  |  eig(K_s)       | K err  D err  xi err | reduced K err  D err | "
-        "VAF1  VAF2",
+        "T_obs  k  ext |   cond  |  eig(K_s)       | full: K err int  eff | D err int  eff | xi err | "
+        "reduced: K err int  eff | D err eff | VAF1  VAF2",
     ]
     for w in results["windows"]:
         red = w.get("reduced", {})
         lines.append(
             f"{w['t_obs_s'] * 1000:4.0f}ms {w['k']:2d}  {'*' if w['extension'] else ' '}  | "
             f"{w.get('cond', float('nan')):7.0f} | "
-            f"{w['eig_Ks'][0]:6.2f} {w['eig_Ks'][1]:6.2f}  | {w.get('K_rel_err', float('nan')) * 100:5.1f}% "
-            f"{w.get('D_rel_err', float('nan')) * 100:5.1f}% "
-            f"{w.get('xi_rel_err', float('nan')) * 100:5.1f}% | "
-            f"{red.get('K_rel_err', float('nan')) * 100:11.1f}%  "
-            f"{red.get('D_rel_err', float('nan')) * 100:5.1f}% | "
+            f"{w['eig_Ks'][0]:6.2f} {w['eig_Ks'][1]:6.2f}  |       "
+            f"{_pct(w, 'K_rel_err', 8)} {_pct(w, 'K_err_effective')} | "
+            f"{_pct(w, 'D_rel_err', 9)} {_pct(w, 'D_err_effective')} | {_pct(w, 'xi_rel_err')} |"
+            f"          {_pct(red, 'K_rel_err', 8)} {_pct(red, 'K_err_effective')} | "
+            f"{_pct(red, 'D_err_effective', 9)} | "
             f"{w['validation']['vaf_pct'][0]:4.0f}% {w['validation']['vaf_pct'][1]:4.0f}%"
+        )
+    if "truths" in results:
+        lines.append(
+            f"truths: int = intrinsic ({results['truths']['intrinsic']}); "
+            f"eff = effective ({results['truths']['effective']})"
         )
     for model in ("full", "reduced"):
         c = results["criteria"][model]
         lines.append(
             f"{model:8s} criteria first met: K pos. def. {_fmt(c['K_pd_from_s'])}, quasi-symmetric "
             f"{_fmt(c['symmetric_from_s'])}, quasi-constant {_fmt(c['constant_from_s'])}"
+        )
+    if "tolerances" in results:
+        t = results["tolerances"]
+        lines.append(
+            f"tolerances: quasi-symmetric |A-A^T|/|A+A^T| < {t['symmetry_tol']:g} (K and D); quasi-constant "
+            + (
+                f"change to the next window < {t['constancy_tol_per_s']:g} x block norm per s of T_obs"
+                if t.get("constancy_tol_per_s") is not None
+                else f"change to the next window < {t['constancy_tol']:g} x block norm per window step"
+            )
         )
     p = results["paper"]
     lines.append(
@@ -94,6 +122,6 @@ def format_table(results: dict, viz=None) -> str:
         lines.append(
             f"linearisation bias ({b['muscle']} muscles, {b['conditions']}) at T_obs = "
             f"{b['t_obs_s'] * 1000:.0f} ms: K {b['K_rel_err'] * 100:.2f} %, D {b['D_rel_err'] * 100:.2f} %, "
-            f"xi {b['xi_rel_err'] * 100:.2f} %"
+            f"xi {b['xi_rel_err'] * 100:.2f} % (against the intrinsic truth)"
         )
     return "\n".join(lines)

@@ -28,6 +28,8 @@ import numpy as np
 
 from armlab.config.diagnosis import DiagnosisConfig, RefereeConfig
 from armlab.config.effects import EFFECTS, EffectsConfig
+from armlab.config.schema import CuffConfig
+from armlab.config.subject import SubjectConfig
 from armlab.diagnosis.scoring import Dataset, log_uniform
 from armlab.protocols.conditioning_window.config import ConditioningWindowConfig
 
@@ -81,11 +83,14 @@ def _configs(hidden: tuple[str, ...], rng, ref: RefereeConfig):
             cocontraction=float(rng.uniform(0.1, 0.4)),  # 1, activation (assumption: relaxed to firm)
             preload_N=float(rng.uniform(2.0, 8.0)),  # N, around the paper's 5 N (Sec. IV-B)
         ),
-        cuff=replace(base.cuff, rigid=True),
+        # the referee's own nominal lab: rigid cuff (with CuffConfig's own damping for a hidden
+        # cuff compliance), ideal sensors, a steady subject; hidden effects are added below
+        cuff=CuffConfig(rigid=True),
         reflex=replace(base.reflex, enabled=False),
         sensors=replace(base.sensors, preset="ideal"),
         scenario=replace(base.scenario, k_values=list(ref.cond_windows), n_trials=ref.cond_trials),
         effects=EffectsConfig(),
+        subject=SubjectConfig(),
     )
     cfg = base
     params: dict[str, dict] = {}
