@@ -76,6 +76,9 @@ _QUICK = {  # tests: 2 arrays x 2 payloads, 12 s trials (9 s least squares, 3 s 
 }
 
 
+# m: the rest point of the lab's drag before issue 17 (a 0.25 m spring from the shoulder axis)
+_OLD_DRAG_NEUTRAL_M = (0.25, 0.0)
+
 #: single-effect variants of the lab (armlab/config/capstan.py, config/schema.py)
 VARIANTS = (
     variant(
@@ -85,6 +88,12 @@ VARIANTS = (
         [("capstan.drag", False)],
     ),
     variant("drag_x2", "drag", "cabling drag stiffness x2", scale=[("capstan.drag_stiffness_N_per_m", 2.0)]),
+    variant(
+        "drag_neutral_old",
+        "drag",
+        "drag neutral point 0.25 m out on the x axis (the pre-issue-17 spring's rest point)",
+        [("capstan.drag_neutral_m", _OLD_DRAG_NEUTRAL_M)],
+    ),
     variant(
         "cable_rigid", "cable", "rigid capstan cables (no drive compliance)", [("capstan.cable", "rigid")]
     ),
@@ -123,12 +132,17 @@ VARIANTS = (
 )
 
 
-#: the lab before issue 17's added effects (both off at once): the "before" of the report
+#: the lab before issue 17 (approximately): neither added effect, the drag pulling towards its old
+#: rest point (its stiffnesses stay the new ones): the "before" of the report
 BEFORE = variant(
     "before",
     "issue 17",
     "the lab without the effects added for issue 17",
-    [("capstan.id_ee_mass_kg", 0.0), ("capstan.drag_hysteresis_m", 0.0)],
+    [
+        ("capstan.id_ee_mass_kg", 0.0),
+        ("capstan.drag_hysteresis_m", 0.0),
+        ("capstan.drag_neutral_m", _OLD_DRAG_NEUTRAL_M),
+    ],
 )
 
 
