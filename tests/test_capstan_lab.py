@@ -24,7 +24,7 @@ RANGE_RAD = np.deg2rad(10.0)  # the impedance trials' 10 deg per joint (Sec. II-
 HOME = np.array([np.pi / 4, np.pi / 4])
 # rigid cables, no drag, no friction, no load: Eqs. (11)-(13) with Table VI (to the rigid
 # equality's softness, ~1e-4 relative; tests/test_capstan_robot.py)
-IDEAL = CapstanConfig(cable="rigid", drag=False, coulomb_Nm=0.0)
+IDEAL = CapstanConfig(cable="rigid", drag=False, coulomb_Nm=0.0, id_ee_mass_kg=0.0)  # effects off
 
 
 def _refs(seed: int, n: int, fade_s: float = SETTLE_S):
@@ -177,7 +177,9 @@ def test_timestep_must_divide_the_sample_period(timestep_s, fs_hz):
 def test_divergence_raises():
     # a 5e4 N·m/rad explicit cable at 1 ms: the rotor mode sqrt(k / N² Jm) = 6100 rad/s has
     # omega dt = 6 > 2, unstable under Euler (models/capstan_planar/README.md)
-    cfg = CapstanConfig(cable="compliant", cable_stiffness_Nm_per_rad=5e4, drag=False, coulomb_Nm=0.0)
+    cfg = CapstanConfig(
+        cable="compliant", cable_stiffness_Nm_per_rad=5e4, drag=False, coulomb_Nm=0.0, id_ee_mass_kg=0.0
+    )
     scene = build_capstan_scene(cfg, "none", timestep_s=0.001, integrator="Euler")
     with pytest.raises(SimulationError, match="diverged"):
         _run(scene, _refs(seed=0, n=1), cfg, duration_s=0.5, settle_s=0.1)
@@ -186,7 +188,9 @@ def test_divergence_raises():
 def test_unstable_run_warns_in_mujoco():
     # the same divergence seen directly: MuJoCo flags it (and resets) rather than leaving NaN,
     # which is why a NaN check alone cannot see it
-    cfg = CapstanConfig(cable="compliant", cable_stiffness_Nm_per_rad=5e4, drag=False, coulomb_Nm=0.0)
+    cfg = CapstanConfig(
+        cable="compliant", cable_stiffness_Nm_per_rad=5e4, drag=False, coulomb_Nm=0.0, id_ee_mass_kg=0.0
+    )
     scene = build_capstan_scene(cfg, "none", timestep_s=0.001, integrator="Euler")
     data = mujoco.MjData(scene.model)
     mujoco.mj_setState(scene.model, data, scene.initial_state(HOME), mujoco.mjtState.mjSTATE_FULLPHYSICS)

@@ -134,12 +134,26 @@ def test_ranking_puts_the_smallest_distance_first_and_the_verdict_follows(quick_
     assert result["paper"]["labels"] == ["K1", "K4", "M1", "M5"] == result["nominal"]["pattern"]["labels"]
 
 
+def test_headlines_compare_the_lab_before_and_after_the_added_effects(quick_run):
+    _, _, result = quick_run
+    hl = result["headlines"]
+    before, after = hl["before"]["values"], hl["after"]["values"]
+    # before: Coulomb friction puts Method 1's mass above Method 2's (opposite to the paper);
+    # after: the identified model's inertia error (capstan.id_ee_mass_kg) turns the sign
+    assert all(v > 0 for v in before["gap_m_kg"].values())
+    assert all(v < -0.02 for v in after["gap_m_kg"].values())
+    assert set(hl["role"]) >= set(hl["after"]["meets"])
+    for v in result["variants"]:  # every variant is judged table by table
+        assert "gap_k_xx_N_per_m" in v["headlines"] and "xv_mm" in v["headlines"]
+
+
 def test_outputs_are_written_once_and_never_overwritten(quick_run):
     cfg, out, result = quick_run
     saved = json.loads((out / "results.json").read_text())
     assert saved["verdict"]["best"] == result["verdict"]["best"]
     report = (out / "report.md").read_text()
     assert "**Verdict:**" in report and "robot_table_vi" in report and "drag_off" in report
+    assert "Table by table" in report and "calibration (Table III)" in report
     before = report
     with pytest.raises(DataError, match="never overwrites"):
         pv.run_published_vfs(cfg, out, variants=["drag_off"], quick=True)

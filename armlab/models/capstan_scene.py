@@ -51,6 +51,8 @@ LOADS = ("none", "fixture", "arm")
 Load = Literal["none", "fixture", "arm"]
 # point-like payload: spin inertia small enough that Eq. (5)'s M = m I holds (assumption)
 _PAYLOAD_SPIN_KGM2 = 1e-6
+# m, anchor-to-neutral-point length of the two drag springs (long, so that each acts along its axis)
+_DRAG_LEVER_M = 1.0
 # rad, the posture at which models/arm_planar/arm_planar_linear.xml sets every muscle's tension
 # (conditioning paper IV-B; the file's header)
 MUSCLE_DESIGN_Q_RAD = (0.08, 1.00)
@@ -147,9 +149,12 @@ def _robot(cfg: CapstanConfig, load: str, payload_kg: float) -> mjcf.RootElement
         motor.biastype = "affine"
         motor.biasprm = [0.0, -cfg.kp_Nm_per_rad, -cfg.kd_Nms_per_rad]
     handle = robot.find("body", "handle")
+    if cfg.id_ee_mass_kg > 0:
+        _take_ee_mass(robot, cfg.id_ee_mass_kg)
     if load == "none":
-        handle.inertial.mass = 0.0
-        handle.inertial.diaginertia = [0.0, 0.0, 0.0]
+        handle.inertial.mass = cfg.id_ee_mass_kg
+        handle.inertial.pos = [0.0, 0.0, 0.0]
+        handle.inertial.diaginertia = [_PAYLOAD_SPIN_KGM2] * 3 if cfg.id_ee_mass_kg > 0 else [0.0] * 3
     elif load == "fixture":
         handle.inertial.mass = payload_kg
         handle.inertial.pos = [0.0, 0.0, 0.0]
@@ -157,6 +162,32 @@ def _robot(cfg: CapstanConfig, load: str, payload_kg: float) -> mjcf.RootElement
     else:
         handle.inertial.mass = cfg.handle_mass_kg
     return robot
+
+
+def _take_ee_mass(robot: mjcf.RootElement, mass_kg: float) -> None:
+    """Take a point mass at the end effector out of link 2 (``capstan.id_ee_mass_kg``).
+
+    Link 2 keeps its mass properties about the elbow minus a point mass ``mass_kg`` at the ``ee``
+    site: the bare robot of the impedance trials is lighter than Table VI by exactly that point
+    mass; the identification's robot (load ``none``: the mass put back on the handle, at the end
+    effector) is Table VI again.
+    """
+    link2 = robot.find("body", "link2")
+    ee = np.asarray(robot.find("site", "ee").pos[:2], float)
+    inertial = link2.inertial
+    m, c = float(inertial.mass), np.asarray(inertial.pos[:2], float)
+    izz = float(inertial.diaginertia[2]) + m * c @ c  # about the elbow axis
+    m_new = m - mass_kg
+    if m_new <= 0:
+        raise ConfigError(f"capstan.id_ee_mass_kg={mass_kg} kg must be below link 2's mass {m} kg")
+    c_new = (m * c - mass_kg * ee) / m_new
+    izz_new = izz - mass_kg * ee @ ee - m_new * c_new @ c_new
+    if izz_new <= 0:
+        raise ConfigError(f"capstan.id_ee_mass_kg={mass_kg} kg leaves link 2 no inertia of its own")
+    inertial.mass = m_new
+    inertial.pos = [c_new[0], c_new[1], float(inertial.pos[2])]
+    d = list(inertial.diaginertia)
+    inertial.diaginertia = [izz_new, d[1], izz_new]  # the MJCF's axes: link 2 along -y, z vertical
 
 
 def _height(robot: mjcf.RootElement, body: str) -> float:
@@ -185,21 +216,32 @@ def _add_springs(root: mjcf.RootElement, robot: mjcf.RootElement, array: SpringA
 
 
 def _add_drag(root: mjcf.RootElement, robot: mjcf.RootElement, cfg: CapstanConfig) -> None:
-    anchor = root.worldbody.add(
-        "site",
-        name="drag_anchor",
-        pos=[cfg.drag_anchor_m[0], cfg.drag_anchor_m[1], _height(robot, "link2")],  # the ee site's plane
-        size=[0.005],
-    )
-    tendon = root.tendon.add(
-        "spatial",
-        name="drag",
-        stiffness=cfg.drag_stiffness_N_per_m,
-        springlength=[cfg.drag_rest_length_m] * 2,
-    )
-    tendon.width = 0.002
-    tendon.add("site", site=anchor)
-    tendon.add("site", site=robot.find("site", "ee"))
+    """The cabling drag force field ``-diag(k_x, k_y) (X - X_n)`` as two long axial springs.
+
+    One spatial tendon per axis from a bench anchor ``_DRAG_LEVER_M`` behind (x) or beside (y) the
+    neutral point ``X_n`` to the ``ee`` site, at rest length ``_DRAG_LEVER_M``: it pulls along its
+    axis with its stiffness, and its tension across the axis adds only ``T / _DRAG_LEVER_M``
+    (below 2 N/m within the fixtures' 5 cm region).
+    """
+    z = _height(robot, "link2")  # the ee site's plane
+    xn, yn = cfg.drag_neutral_m
+    for axis, k, anchor in (
+        ("x", cfg.drag_stiffness_N_per_m, (xn - _DRAG_LEVER_M, yn)),
+        ("y", cfg.drag_stiffness_y_N_per_m, (xn, yn - _DRAG_LEVER_M)),
+    ):
+        if k <= 0:
+            continue
+        site = root.worldbody.add("site", name=f"drag_anchor_{axis}", pos=[*anchor, z], size=[0.005])
+        tendon = root.tendon.add(
+            "spatial",
+            name=f"drag_{axis}",
+            stiffness=k,
+            springlength=[_DRAG_LEVER_M] * 2,
+            frictionloss=k * cfg.drag_hysteresis_m,
+        )
+        tendon.width = 0.002
+        tendon.add("site", site=site)
+        tendon.add("site", site=robot.find("site", "ee"))
 
 
 def _recentre_muscles(arm_model: mjcf.RootElement, handle_from_shoulder: np.ndarray) -> None:

@@ -21,6 +21,82 @@ def _table_md(rows: list[dict]) -> list[str]:
     ]
 
 
+def _fmt(v) -> str:
+    if isinstance(v, dict):
+        return ", ".join(f"{k} {_fmt(x)}" for k, x in v.items())
+    if isinstance(v, (tuple, list)):
+        return " / ".join(_fmt(x) for x in v)
+    if isinstance(v, float):
+        return "n/a" if not np.isfinite(v) else f"{v:.3g}" if abs(v) < 1 else f"{v:.1f}"
+    return str(v)
+
+
+_HEADLINE_WHAT = {
+    "gap_k_xx_N_per_m": "Table III: Method 1 - 2 k_xx, N/m",
+    "gap_m_kg": "Table III: Method 1 - 2 m, kg",
+    "x0_max_err_mm": "Table III text: largest |X0 - Table I|, mm",
+    "table_IV_vaf_pct": "Table IV: Method 1 VAF min / max, %",
+    "table_IV_stiffer_higher": "Table IV: share of K1-K4 cells, stiffer axis higher",
+    "table_V_vaf_pct": "Table V: arm VAF min / max, %",
+    "xv_mm": "Table V: x_v Method 1 / 2, mm",
+    "xv_diff_mm": "Table V: |x_v1 - x_v2|, mm",
+    "alpha45_rel_err": "Table VI: alpha4 / alpha5 rel. error",
+}
+
+
+def _headline_lines(result: dict) -> list[str]:
+    hl = result.get("headlines")
+    if not hl:
+        return []
+    before, after = hl["before"], hl["after"]
+
+    def mark(block: dict, name: str) -> str:
+        ok = block["meets"].get(name)
+        return "" if ok is None else " (meets)" if ok else " (**misses**)"
+
+    lines = [
+        "## Table by table: paper, lab before and after the added effects",
+        "Before: the lab without issue 17's added effects (`capstan.id_ee_mass_kg=0`, "
+        "`capstan.drag_hysteresis_m=0`, the drag pulling towards its old rest point "
+        "`capstan.drag_neutral_m=(0.25, 0)`); after: the default lab. (meets)/(misses): issue 17's "
+        "tolerance. Role: which figures calibrate the added effects and which only check them.",
+        "",
+        "| figure | role | paper | before | after |",
+        "|---|---|---|---|---|",
+    ]
+    for name, what in _HEADLINE_WHAT.items():
+        if name not in after["values"] and name not in before["values"]:
+            continue
+        lines.append(
+            f"| {what} | {hl['role'][name]} | {_fmt(hl['paper'][name])} | "
+            f"{_fmt(before['values'].get(name, 'n/a'))}{mark(before, name)} | "
+            f"{_fmt(after['values'].get(name, 'n/a'))}{mark(after, name)} |"
+        )
+    lines += [
+        "",
+        f"Table III pattern distance to the paper: before {before['distance']:.2f} pp, after "
+        f"{result['nominal']['distance']:.2f} pp.",
+        "",
+        "Each effect taken out alone (ranked below by the Table III distance); issue-17 tolerances met:",
+        "",
+        "| variant | tolerances met | k_xx gap, N/m | m gap, kg | Table IV VAF, % | Table V VAF, % "
+        "| x_v, mm |",
+        "|---|---:|---|---|---|---|---|",
+    ]
+    for v in result["variants"]:
+        h, meets = v["headlines"], v["meets"]
+        gaps = h.get("gap_k_xx_N_per_m", {}).values()
+        mgaps = h.get("gap_m_kg", {}).values()
+        lines.append(
+            f"| {v['name']} | {sum(meets.values())}/{len(meets)} | "
+            f"{_fmt((min(gaps), max(gaps))) if gaps else 'n/a'} | "
+            f"{_fmt((min(mgaps), max(mgaps))) if mgaps else 'n/a'} | "
+            f"{_fmt(h.get('table_IV_vaf_pct', 'n/a'))} | {_fmt(h.get('table_V_vaf_pct', 'n/a'))} | "
+            f"{_fmt(h.get('xv_mm', 'n/a'))} |"
+        )
+    return [*lines, ""]
+
+
 def format_report(result: dict) -> str:
     """Markdown of a :func:`~armlab.reproduction.vfs.diagnose_pattern` result, readable alone."""
     s, paper, nom, verdict = result["settings"], result["paper"], result["nominal"], result["verdict"]
@@ -35,6 +111,7 @@ def format_report(result: dict) -> str:
         "",
         f"**Verdict:** {verdict['text']}.",
         "",
+        *_headline_lines(result),
         "## Pattern: paper vs nominal simulation",
         "Relative error = (value - truth) / |truth|; stiffness pools k_xx and k_yy; slopes are least-squares "
         "fits of the relative error on true stiffness (per 100 N/m) or on payload mass (per kg).",

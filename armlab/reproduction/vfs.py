@@ -30,8 +30,10 @@ from armlab.protocols.virtual_force_sensor.experiment import simulate_vfs
 from armlab.protocols.virtual_force_sensor.results import METHODS, PAPER_TABLE_III, estimate_vfs
 from armlab.reproduction._vfs_text import format_report
 from armlab.reproduction.variants import variant
+from armlab.reproduction.vfs_headlines import PAPER, ROLE, check, headlines
 
 __all__ = [
+    "BEFORE",
     "PROTOCOL_NAME",
     "DIFF_FEATURES",
     "FEATURES",
@@ -65,14 +67,17 @@ FEATURES = {  # what pattern_distance compares, all dimensionless (k_s left out:
 # Method 1 - Method 2 only: blind to an error of Table I's truth, which both methods share
 DIFF_FEATURES = ("diff_k_xx_median", "diff_k_yy_median", "diff_m_median")
 # the diagnosis's protocol: one trial per configuration (Table III rows average 5 trials, not 15),
-# at most two robot-identification trials, no arm trials (Table V is not compared)
-_REDUCED = {"trials_per_config": 1, "arm_trials": 0}
+# at most two robot-identification trials, one arm trial (Table V from it)
+_REDUCED = {"trials_per_config": 1, "arm_trials": 1}
 _QUICK = {  # tests: 2 arrays x 2 payloads, 12 s trials (9 s least squares, 3 s VAF), 1 robot trial
     "stiffness": ["K1", "K4"],
     "payloads": ["M1", "M5"],
     **{"trial_s": 12.0, "id_s": 9.0, "val_s": 3.0, "settle_s": 1.0, "robot_id_trials": 1},
 }
 
+
+# m: the rest point of the lab's drag before issue 17 (a 0.25 m spring from the shoulder axis)
+_OLD_DRAG_NEUTRAL_M = (0.25, 0.0)
 
 #: single-effect variants of the lab (armlab/config/capstan.py, config/schema.py)
 VARIANTS = (
@@ -84,6 +89,12 @@ VARIANTS = (
     ),
     variant("drag_x2", "drag", "cabling drag stiffness x2", scale=[("capstan.drag_stiffness_N_per_m", 2.0)]),
     variant(
+        "drag_neutral_old",
+        "drag",
+        "drag neutral point 0.25 m out on the x axis (the pre-issue-17 spring's rest point)",
+        [("capstan.drag_neutral_m", _OLD_DRAG_NEUTRAL_M)],
+    ),
+    variant(
         "cable_rigid", "cable", "rigid capstan cables (no drive compliance)", [("capstan.cable", "rigid")]
     ),
     variant(
@@ -91,6 +102,18 @@ VARIANTS = (
         "cable",
         "capstan cables half as stiff",
         scale=[("capstan.cable_stiffness_Nm_per_rad", 0.5)],
+    ),
+    variant(
+        "model_inertia_off",
+        "robot model",
+        "no inertia error in the identified robot model (added for issue 17)",
+        [("capstan.id_ee_mass_kg", 0.0)],
+    ),
+    variant(
+        "hysteresis_off",
+        "drag",
+        "no hysteresis of the cable harness (added for issue 17)",
+        [("capstan.drag_hysteresis_m", 0.0)],
     ),
     variant("coulomb_off", "friction", "no Coulomb friction", [("capstan.coulomb_Nm", 0.0)]),
     variant("coulomb_x3", "friction", "Coulomb friction x3", scale=[("capstan.coulomb_Nm", 3.0)]),
@@ -106,6 +129,20 @@ VARIANTS = (
     variant(
         "sensors_ideal", "sensors", "no sensor noise, bias or bandwidth at all", [("sensors.preset", "ideal")]
     ),
+)
+
+
+#: the lab before issue 17 (approximately): neither added effect, the drag pulling towards its old
+#: rest point (its stiffnesses stay the new ones): the "before" of the report
+BEFORE = variant(
+    "before",
+    "issue 17",
+    "the lab without the effects added for issue 17",
+    [
+        ("capstan.id_ee_mass_kg", 0.0),
+        ("capstan.drag_hysteresis_m", 0.0),
+        ("capstan.drag_neutral_m", _OLD_DRAG_NEUTRAL_M),
+    ],
 )
 
 
@@ -205,11 +242,12 @@ def pattern_distance(a: dict, b: dict, features: tuple[str, ...] = tuple(FEATURE
     return float(100.0 * np.sqrt(np.mean(d**2))) if d.size else float("nan")
 
 
-def _simulate(cfg: VirtualForceSensorConfig) -> tuple[list[dict], float]:
+def _simulate(cfg: VirtualForceSensorConfig) -> tuple[list[dict], dict, float]:
     t0 = time.perf_counter()
     rec = simulate_vfs(cfg)
     results, _ = estimate_vfs(rec.trials, cfg.vfs, rec.truth)
-    return simulated_table(results["fixture"]["table_III"]), time.perf_counter() - t0
+    rows = simulated_table(results["fixture"]["table_III"])
+    return rows, headlines(results), time.perf_counter() - t0
 
 
 def diagnose_pattern(
@@ -239,14 +277,15 @@ def diagnose_pattern(
         cfg,
         vfs=replace(v, **_REDUCED, **(_QUICK if quick else {"robot_id_trials": min(v.robot_id_trials, 2)})),
     )
-    nominal_rows, nominal_s = _simulate(base)
+    nominal_rows, nominal_h, nominal_s = _simulate(base)
+    before_rows, before_h, _ = _simulate(BEFORE.apply(base))
     paper_rows = paper_table(sorted({r["label"] for r in nominal_rows}))
     paper, nominal = pattern(paper_rows), pattern(nominal_rows)
     d_nom = pattern_distance(nominal, paper)
     d_nom_diff = pattern_distance(nominal, paper, DIFF_FEATURES)
     ranked = []
     for name in names:
-        rows, wall = _simulate(catalog[name].apply(base))
+        rows, h, wall = _simulate(catalog[name].apply(base))
         p = pattern(rows)
         var = catalog[name]
         ranked.append(
@@ -259,6 +298,8 @@ def diagnose_pattern(
                 "distance_diff_only": pattern_distance(p, paper, DIFF_FEATURES),
                 "pattern": p,
                 "table": rows,
+                "headlines": h,
+                "meets": check(h),
             }
         )
     ranked.sort(key=lambda r: r["distance"])
@@ -285,6 +326,16 @@ def diagnose_pattern(
         },
         "paper": paper,
         "paper_table": paper_rows,
+        "headlines": {
+            "paper": PAPER,
+            "role": ROLE,
+            "before": {
+                "values": before_h,
+                "meets": check(before_h),
+                "distance": pattern_distance(pattern(before_rows), paper),
+            },
+            "after": {"values": nominal_h, "meets": check(nominal_h)},
+        },
         "nominal": {
             "distance": d_nom,
             "distance_diff_only": d_nom_diff,

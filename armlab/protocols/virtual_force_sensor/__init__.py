@@ -23,12 +23,15 @@ PROTOCOL = Protocol(
     format_table=hooks.format_table,
     examples=(
         "run protocol=virtual_force_sensor capstan.cable=rigid capstan.drag=false",
+        "run protocol=virtual_force_sensor sensors=ideal capstan.cable=rigid capstan.drag=false "
+        "capstan.coulomb_Nm=0 capstan.id_ee_mass_kg=0",
         "estimate outputs/virtual_force_sensor/<run> vfs.robot_model=table_vi",
     ),
     lab_effects={
         "cable_drag": "capstan.drag",
         "transmission_compliance": "capstan.cable",
         "joint_friction": "capstan.coulomb_Nm",
+        "robot_model_error": "capstan.id_ee_mass_kg",
     },
     catalogue=(
         "reflex",
