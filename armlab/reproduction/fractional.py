@@ -59,11 +59,15 @@ _BEFORE = {
     ],
 }
 _ORDER = ("27", "28", "29", "A", "B")
+#: variants that ADD an effect absent from the default (the others remove one): their move towards
+#: the paper is the default's distance minus theirs
+_ADDED = frozenset({"subject_fluctuation"})
 
 
 def added_effect_variants(quick: bool = False) -> list[Variant]:
-    """The lab before every added effect, each added effect removed alone, and the reflex off;
-    ``quick`` (tests): the first two only (the scenario needs its two trials, ~12 s per run)."""
+    """The lab before every added effect, each added effect removed alone, the reflex off, and the
+    subject's activation fluctuation added (calibrated on seeds/000, checked here); ``quick``
+    (tests): the first two only (the scenario needs its two trials, ~12 s per run)."""
     out = [
         variant(
             "before",
@@ -80,6 +84,13 @@ def added_effect_variants(quick: bool = False) -> list[Variant]:
         ),
         variant("old_reflex", "reflex", "old reflex (35 ms, gains 0.5, spinal 0.5)", _BEFORE["reflex"]),
         variant("reflex_off", "reflex", "reflex off", [("reflex.enabled", False)]),
+        variant(
+            "subject_fluctuation",
+            "subject",
+            "ADDED: the conditioning lab's fluctuating subject (3.5 % rms per muscle, 2 Hz; 10 % "
+            "per trial), not in the default",
+            [("subject.enabled", True)],
+        ),
     ]
     return out[:2] if quick else out
 
@@ -131,9 +142,11 @@ def diagnose_fractional(
 
     Returns:
         ``{"paper", "seed", "quick", "nominal", "variants" (ranked: name, effect, description,
-        change, fig4, fig4_distance, moves_toward_paper, table_I, error), "verdict"}``; a variant's
+        change, fig4, fig4_distance, moves_toward_paper, table_I, error, added), "verdict"}``; a variant's
         ``moves_toward_paper`` is its distance minus the nominal one (positive: the effect, present
-        in the default, brings the lab that much closer to the paper).
+        in the default, brings the lab that much closer to the paper); for a variant that ``added``
+        an effect absent from the default, the nominal distance minus its own (positive: adding
+        it would bring the lab closer).
     """
     if not isinstance(cfg, FractionalElbowConfig):
         raise ConfigError(
@@ -156,6 +169,7 @@ def diagnose_fractional(
             "moves_toward_paper": None,
             "table_I": None,
             "error": None,
+            "added": v.name in _ADDED,
         }
         try:
             m = _measure(vcfg)
@@ -163,7 +177,8 @@ def diagnose_fractional(
             entry["error"] = f"{type(exc).__name__}: {exc}"
         else:
             entry.update(fig4=m["fig4"], fig4_distance=m["fig4_distance"], table_I=m["table_I"])
-            entry["moves_toward_paper"] = round(m["fig4_distance"] - nominal["fig4_distance"], 4)
+            move = m["fig4_distance"] - nominal["fig4_distance"]
+            entry["moves_toward_paper"] = round(-move if v.name in _ADDED else move, 4)
         entries.append(entry)
     ranked = sorted(entries, key=lambda e: (e["moves_toward_paper"] is None, -(e["moves_toward_paper"] or 0)))
     return {
@@ -180,7 +195,10 @@ def diagnose_fractional(
 
 def _verdict(nominal: dict, ranked: list[dict]) -> dict:
     before = next((e for e in ranked if e["name"] == "before" and e["fig4_distance"] is not None), None)
-    single = [e for e in ranked if e["name"] != "before" and e["moves_toward_paper"] is not None]
+    single = [
+        e for e in ranked if e["name"] != "before" and not e["added"] and e["moves_toward_paper"] is not None
+    ]
+    added = [e for e in ranked if e["added"] and e["table_I"] is not None]
     checks = nominal["table_I"]
     text = f"Fig. 4 distance of the default lab: {nominal['fig4_distance']:.2f}"
     if before:
@@ -197,6 +215,13 @@ def _verdict(nominal: dict, ranked: list[dict]) -> dict:
         f"alpha (28) {checks['alpha_28']:.1f} ({'ok' if checks['alpha_28_ok'] else 'paper 1.4'}), "
         f"alpha (29) {checks['alpha_29']:.1f} ({'ok' if checks['alpha_29_ok'] else 'paper 1.1'})."
     )
+    for e in added:
+        t = e["table_I"]
+        text += (
+            f" Adding {e['name']}: Fig. 4 distance {e['fig4_distance']:.2f}, ranking "
+            f"{' < '.join(t['ranking'])}, alpha (28) {t['alpha_28']:.1f}, (29) {t['alpha_29']:.1f}, "
+            f"R² {min(t['r2']):.2f}-{max(t['r2']):.2f} (paper 0.80-0.94)."
+        )
     return {"text": text, "best": single[0]["name"] if single else None}
 
 
@@ -212,11 +237,11 @@ def format_report(result: dict) -> str:
         "Fig. 4 calibrates the added effects; Table I only checks them. Distance: sum over the "
         "features of the miss outside the paper's band (dB, Hz, phase / 10 deg).",
         "",
-        "| lab | " + " | ".join(keys) + " | distance | Table I ranking | α(28) | α(29) | stable |",
-        "|---|" + "---|" * (len(keys) + 5),
+        "| lab | " + " | ".join(keys) + " | distance | Table I ranking | α(28) | α(29) | stable | R² |",
+        "|---|" + "---|" * (len(keys) + 6),
         "| paper | "
         + " | ".join(f"{lo:g}…{hi:g}" for lo, hi in (paper[k] for k in keys))
-        + " | 0 | 27<28<29<A,B | 1.4 | 1.1 | all |",
+        + " | 0 | 27<28<29<A,B | 1.4 | 1.1 | all | 0.80–0.94 |",
     ]
 
     def row(name: str, m: dict) -> str:
@@ -225,7 +250,8 @@ def format_report(result: dict) -> str:
             f"| {name} | "
             + " | ".join(f"{m['fig4'][k]:.1f}" for k in keys)
             + f" | {m['fig4_distance']:.2f} | {'<'.join(t['ranking'])} | {t['alpha_28']:.1f} | "
-            f"{t['alpha_29']:.1f} | {'all' if t['all_stable'] else 'not all'} |"
+            f"{t['alpha_29']:.1f} | {'all' if t['all_stable'] else 'not all'} | "
+            f"{min(t['r2']):.2f}–{max(t['r2']):.2f} |"
         )
 
     lines.append(row("default", result["nominal"]))

@@ -8,8 +8,9 @@ Each 1/fs control period the controller reads the encoder and the handle force s
 with theta_d from low-passed differences of the encoder and theta_dd from the JR3's accelerometer
 (tangential axis, read one control period late), and commands the current
 ``I_C = tau / K_torque`` (Eq. (19)) through a 16-bit reference. The elbow's muscles receive their
-co-contraction plus the delayed stretch reflex, or the fractional element its torque. A trial
-whose motor angle leaves the safety range fails with :class:`SimulationError`.
+co-contraction (fluctuating, when a subject's commands are given) plus the delayed stretch reflex,
+or the fractional element its torque. A trial whose motor angle leaves the safety range fails
+with :class:`SimulationError`.
 
 The controller needs each sample's measurement before the next step, so MuJoCo is stepped from
 Python once per control period (``mujoco.rollout`` cannot close a Python feedback loop).
@@ -87,6 +88,7 @@ def simulate_force_trial(
     encoder_spec: ChannelSpec,
     rng: np.random.Generator,
     accel_noise_rad_s2: float = 0.0,
+    muscle_base: np.ndarray | None = None,
 ) -> ForceTrial:
     """Simulate one trial: ``settle_s`` of hold at zero force, then ``f_ref`` (recorded).
 
@@ -101,6 +103,10 @@ def simulate_force_trial(
             ``encoder_spec.drift_per_s`` is not used); the sensors' filters and delays are not
             modelled in the loop.
         rng: source of the sensor noise.
+        accel_noise_rad_s2: rad/s², rms noise of the accelerometer read by the compensation.
+        muscle_base: (n_settle + n, n_muscles) the muscles' commands before the reflex at every
+            control period, settle included (a subject whose activation fluctuates, see
+            :mod:`armlab.sim.subject`); None: ``elbow.cocontraction`` throughout.
 
     Returns:
         The recorded :class:`ForceTrial`.
@@ -140,6 +146,11 @@ def simulate_force_trial(
 
     data = mujoco.MjData(m)
     muscles = scene.muscle_act
+    if muscle_base is not None and np.shape(muscle_base) != (total, muscles.size):
+        raise ConfigError(
+            f"muscle_base has shape {np.shape(muscle_base)}; need (settle + record samples, muscles) = "
+            f"{(total, muscles.size)}"
+        )
     act_idx = m.actuator_actadr[muscles] if muscles.size else muscles
     if muscles.size:
         data.act[act_idx] = elbow.cocontraction
@@ -216,8 +227,11 @@ def simulate_force_trial(
             hist_len[k] = data.actuator_length[muscles]
             hist_vel[k] = data.actuator_velocity[muscles]
             lagged = [max(k - lag1, 0), max(k - lag2, 0)]
-            u = reflex_command(elbow.cocontraction, hist_len[lagged], hist_vel[lagged], len_ref, reflex)
+            base = elbow.cocontraction if muscle_base is None else muscle_base[k]
+            u = reflex_command(base, hist_len[lagged], hist_vel[lagged], len_ref, reflex)
             data.ctrl[muscles] = u
+        elif muscle_base is not None:
+            data.ctrl[muscles] = muscle_base[k]
         if element is not None:
             phi = float(data.qpos[qe])
             data.ctrl[scene.element_act] = -element.coeff * (element.C @ x_el + element.D * phi)

@@ -25,7 +25,7 @@ PROTOCOL = Protocol(
         "run protocol=fractional_elbow elbow.impedance=fractional elbow.fractional_order=0.5",
         "estimate outputs/fractional_elbow/<run> frf.welch_window=10000",
     ),
-    lab_effects={"reflex": "reflex.enabled"},
+    lab_effects={"reflex": "reflex.enabled", "cocontraction_variation": "subject.enabled"},
     catalogue=(
         "reflex",
         "joint_friction",
@@ -35,5 +35,6 @@ PROTOCOL = Protocol(
         "encoder_quantisation",
         "channel_delay",
         "payload_mass",
+        "cocontraction_variation",
     ),
 )

@@ -44,6 +44,7 @@ from armlab.protocols.fractional_elbow.config import FractionalElbowConfig
 from armlab.sensors.channel import ChannelSpec
 from armlab.sensors.presets import DD_ENCODER, JR3_FORCE
 from armlab.sim.force_control import simulate_force_trial
+from armlab.sim.subject import activation_commands
 
 __all__ = [
     "FractionalRecording",
@@ -112,10 +113,26 @@ def simulate_fractional(cfg: FractionalElbowConfig) -> FractionalRecording:
     force_spec, enc_spec = (ChannelSpec(), ChannelSpec()) if ideal else (JR3_FORCE, DD_ENCODER)
     accel_noise = 0.0 if ideal else _ACCEL_NOISE_M_S2 / scene.link_length
     rngs = np.random.default_rng(cfg.seed).spawn(scenario.n_trials)
+    fluctuating = cfg.subject.active and scene.muscle_act.size > 0
+    n_settle = int(round(scenario.settle_s * scenario.fs_hz))
     trials = []
     for rng in rngs:
-        plan_rng, noise_rng = rng.spawn(2)
+        # the third child feeds the subject's fluctuation; the first two are those of a 2-way
+        # spawn, so a steady subject draws exactly the force and sensor noise it always did
+        plan_rng, noise_rng, subject_rng = rng.spawn(3)
         f_ref = multisine(scenario, plan_rng)
+        base = None
+        if fluctuating:
+            n_total = n_settle + f_ref.size
+            base = activation_commands(
+                np.full(scene.muscle_act.size, cfg.elbow.cocontraction),
+                cfg.subject,
+                1,
+                n_total,
+                1,
+                scenario.fs_hz,
+                subject_rng,
+            )[0]
         trials.append(
             simulate_force_trial(
                 scene,
@@ -129,6 +146,7 @@ def simulate_fractional(cfg: FractionalElbowConfig) -> FractionalRecording:
                 enc_spec,
                 noise_rng,
                 accel_noise_rad_s2=accel_noise,
+                muscle_base=base,
             )
         )
     names = {
