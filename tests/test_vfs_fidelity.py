@@ -77,6 +77,24 @@ def test_drag_field_with_its_neutral_point_at_the_fixtures_keeps_method1_xv_near
     assert far["xv_diff_mm"] > 30.0
 
 
+def test_subject_fluctuation_lowers_the_arm_vaf_of_both_methods():
+    # the relaxed subject's activation fluctuation (paper 000's values, not re-tuned) is force that
+    # Eq. (9) does not explain: both methods' arm VAF drop; the same trials without it (same
+    # perturbations and sensor noise: the subject draws from its own generator) fit better
+    arm = {"trials_per_config": 0, "arm_trials": 2}
+    cfg = compose(["protocol=virtual_force_sensor"])[1]
+    vafs = []
+    for enabled in (True, False):
+        c = replace(
+            cfg, vfs=replace(cfg.vfs, **{**SHORT, **arm}), subject=replace(cfg.subject, enabled=enabled)
+        )
+        rec = simulate_vfs(c)
+        t5 = estimate_vfs(rec.trials, c.vfs, rec.truth)[0]["arm"]["table_V"]
+        vafs.append([np.mean(t5[m]["vaf_pct"]["mean"]) for m in ("method1", "method2")])
+    (on1, on2), (off1, off2) = vafs
+    assert on1 < off1 and on2 < off2, vafs
+
+
 def test_headlines_and_targets_read_a_hand_made_result():
     t3 = {
         "K1": {me: {"k_xx": {"mean": v}} for me, v in (("method1", 450.0), ("method2", 410.0))},
@@ -132,8 +150,9 @@ def test_default_lab_meets_the_headline(default_run, name):
 @pytest.mark.parametrize("name", ["table_IV_vaf_pct", "table_IV_stiffer_higher", "table_V_vaf_pct"])
 def test_default_lab_misses_the_check(default_run, name):
     # Table IV: the stiffer axis of K3-K5 stays above 98 % (paper <= 97.7 %) and in K1/K2 the
-    # y-VAF equals or beats the x-VAF in 5 of 10 cells; Table V: the simulated arm is a clean
-    # linear system, VAF 97.7-99.7 % (paper 90-94.5 %). Strict: passing would flag the fix
+    # y-VAF equals or beats the x-VAF in 5 of 10 cells; Table V: the simulated arm is a linear
+    # system whose only unexplained force is the subject's activation fluctuation at paper 000's
+    # size, far too small at 4 % activation (see the docs). Strict: passing would flag the fix
     assert check(default_run)[name], (name, default_run[name], TARGETS[name])
 
 

@@ -8,6 +8,7 @@ protocol=virtual_force_sensor` (figures in the issue note).
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -208,3 +209,30 @@ def test_run_writes_outputs_reestimates_and_never_overwrites(tmp_path):
     )  # Method 2 does not use the robot model
     with pytest.raises(DataError, match="never overwrites"):
         run_protocol(cfg, out)
+
+
+def test_subject_fluctuation_reaches_only_the_arm_and_leaves_the_other_streams_unchanged():
+    # the subject (paper 000's values) draws from a spawned child generator: switching it off
+    # gives the same robot/fixture data and the same sensor noise; on, only the arm's forces move
+    kw = dict(
+        stiffness=["K1"],
+        payloads=["M1"],
+        trials_per_config=1,
+        arm_trials=2,
+        robot_id_trials=0,
+        robot_model="table_vi",
+        trial_s=3.0,
+        id_s=2.0,
+        val_s=1.0,
+        settle_s=0.5,
+    )
+    on = _cfg(CapstanConfig(), "realistic", **kw)
+    assert on.subject.active and on.subject.fluctuation_cv == 0.035  # the default lab has it
+    off = replace(on, subject=replace(on.subject, enabled=False))
+    a, b = simulate_vfs(on).trials, simulate_vfs(off).trials
+    arm = a.trial_meta["kind"] == "arm"
+    assert arm.sum() == 2 and np.array_equal(a.channels["ft_site"][~arm], b.channels["ft_site"][~arm])
+    diff = a.channels["ft_site"][arm] - b.channels["ft_site"][arm]
+    assert 0.005 < np.std(diff) < 5.0  # N: the fluctuation moves the arm's force, but not wildly
+    # same config and seed: bit-identical
+    assert np.array_equal(simulate_vfs(on).trials.channels["ft_site"], a.channels["ft_site"])

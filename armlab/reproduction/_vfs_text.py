@@ -58,8 +58,9 @@ def _headline_lines(result: dict) -> list[str]:
         "## Table by table: paper, lab before and after the added effects",
         "Before: the lab without issue 17's added effects (`capstan.id_ee_mass_kg=0`, "
         "`capstan.drag_hysteresis_m=0`, the drag pulling towards its old rest point "
-        "`capstan.drag_neutral_m=(0.25, 0)`); after: the default lab. (meets)/(misses): issue 17's "
-        "tolerance. Role: which figures calibrate the added effects and which only check them.",
+        "`capstan.drag_neutral_m=(0.25, 0)`, `subject.enabled=false`); after: the default lab. "
+        "(meets)/(misses): issue 17's tolerance. Role: which figures calibrate the added effects "
+        "and which only check them.",
         "",
         "| figure | role | paper | before | after |",
         "|---|---|---|---|---|",

@@ -115,6 +115,12 @@ VARIANTS = (
         "no hysteresis of the cable harness (added for issue 17)",
         [("capstan.drag_hysteresis_m", 0.0)],
     ),
+    variant(
+        "subject_steady",
+        "subject",
+        "the arm's activations held exactly (no fluctuation; added for issue 17 from paper 000)",
+        [("subject.enabled", False)],
+    ),
     variant("coulomb_off", "friction", "no Coulomb friction", [("capstan.coulomb_Nm", 0.0)]),
     variant("coulomb_x3", "friction", "Coulomb friction x3", scale=[("capstan.coulomb_Nm", 3.0)]),
     variant(
@@ -142,6 +148,7 @@ BEFORE = variant(
         ("capstan.id_ee_mass_kg", 0.0),
         ("capstan.drag_hysteresis_m", 0.0),
         ("capstan.drag_neutral_m", _OLD_DRAG_NEUTRAL_M),
+        ("subject.enabled", False),
     ],
 )
 

@@ -93,7 +93,9 @@ def simulate_capstan(
         kp, kd: the servo gains in the scene (N·m/rad, N·m·s/rad), for the derivative feed-forward
             ``ctrl = theta_ref + (kd / kp) theta_ref_dot``.
         fs_hz: sample rate of the record, Hz; duration_s: recorded length, s; settle_s: s before.
-        muscle_ctrl: (6,) constant muscle excitations (arm scenes).
+        muscle_ctrl: muscle excitations (arm scenes): (6,) held constant, or
+            (n_trials, n_steps, 6) per trial and physics step (settle steps included, e.g. a
+            subject whose activation fluctuates, :mod:`armlab.sim.subject`).
         nthread: rollout threads (default: the CPU count).
 
     Returns:
@@ -111,6 +113,12 @@ def simulate_capstan(
     n_samples = round(duration_s * fs_hz)
     n_steps = n_settle + n_samples * sub
     n_trials = len(references)
+    per_step = muscle_ctrl is not None and np.ndim(muscle_ctrl) == 3
+    if per_step and np.shape(muscle_ctrl)[:2] != (n_trials, n_steps):
+        raise SimulationError(
+            f"per-step muscle commands must have shape ({n_trials}, {n_steps}, n_muscles), "
+            f"got {np.shape(muscle_ctrl)}"
+        )
     nthread = nthread or os.cpu_count() or 1
     data = [mujoco.MjData(model) for _ in range(min(nthread, n_trials))]
     state = np.tile(np.asarray(initial_state, float), (n_trials, 1))
@@ -122,7 +130,9 @@ def simulate_capstan(
             ctrl = np.zeros((n_trials, len(steps), model.nu))
             for k, ref in enumerate(references):
                 ctrl[k][:, scene.motor_act] = theta0 + ref.value(t) + (kd / kp) * ref.derivative(t)
-            if muscle_ctrl is not None:
+            if per_step:
+                ctrl[:, :, scene.muscle_act] = muscle_ctrl[:, c0 : c0 + len(steps)]
+            elif muscle_ctrl is not None:
                 ctrl[:, :, scene.muscle_act] = muscle_ctrl
             states, sd = runner.rollout(model, data, state, ctrl, nstep=len(steps))
             state = states[:, -1]

@@ -24,7 +24,7 @@ PROTOCOL = Protocol(
     examples=(
         "run protocol=virtual_force_sensor capstan.cable=rigid capstan.drag=false",
         "run protocol=virtual_force_sensor sensors=ideal capstan.cable=rigid capstan.drag=false "
-        "capstan.coulomb_Nm=0 capstan.id_ee_mass_kg=0",
+        "capstan.coulomb_Nm=0 capstan.id_ee_mass_kg=0 subject.enabled=false",
         "estimate outputs/virtual_force_sensor/<run> vfs.robot_model=table_vi",
     ),
     lab_effects={
@@ -32,6 +32,7 @@ PROTOCOL = Protocol(
         "transmission_compliance": "capstan.cable",
         "joint_friction": "capstan.coulomb_Nm",
         "robot_model_error": "capstan.id_ee_mass_kg",
+        "cocontraction_variation": "subject.enabled",
     },
     catalogue=(
         "reflex",

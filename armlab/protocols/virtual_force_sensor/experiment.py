@@ -29,6 +29,7 @@ from armlab.perturbations.sum_of_sines import sum_of_sines
 from armlab.protocols.virtual_force_sensor.config import VirtualForceSensorConfig
 from armlab.sensors.presets import CapstanSensorSuite, measure
 from armlab.sim.capstan_lab import CLEAN_UNITS, simulate_capstan
+from armlab.sim.subject import activation_commands
 
 __all__ = [
     "HOME_THETA_RAD",
@@ -76,6 +77,7 @@ def _stage(
     band_hz: tuple[float, float],
     arm_q: np.ndarray | None = None,
     activation: np.ndarray | None = None,
+    subject_rng: np.random.Generator | None = None,
 ) -> dict[str, np.ndarray]:
     v, c = cfg.vfs, cfg.capstan
     refs = [
@@ -85,6 +87,14 @@ def _stage(
         for _ in range(n_trials)
     ]
     state = scene.initial_state(theta0, arm_q, 0.0 if activation is None else activation)
+    muscle_ctrl = activation
+    if activation is not None and subject_rng is not None and cfg.subject.active:
+        # the subject's fluctuating activation, per trial and physics step (settle steps included)
+        sub = round(1.0 / (cfg.sensors.fs_hz * cfg.sim.timestep_s))
+        n_steps = (round(v.settle_s * cfg.sensors.fs_hz) + round(v.trial_s * cfg.sensors.fs_hz)) * sub
+        muscle_ctrl = activation_commands(
+            activation, cfg.subject, n_trials, n_steps, sub, cfg.sensors.fs_hz, subject_rng
+        )
     clean = simulate_capstan(
         scene,
         state,
@@ -95,7 +105,7 @@ def _stage(
         fs_hz=cfg.sensors.fs_hz,
         duration_s=v.trial_s,
         settle_s=v.settle_s,
-        muscle_ctrl=activation,
+        muscle_ctrl=muscle_ctrl,
     )
     measured = measure({k: clean[k] for k in MEASURED}, _suite(cfg), cfg.sensors.fs_hz, rng)
     return {**measured, **{k: clean[k] for k in _SAVED_TRUTH}}
@@ -111,6 +121,9 @@ def simulate_vfs(cfg: VirtualForceSensorConfig) -> VfsRecording:
     """Simulate every stage of the protocol (module docstring) with the config's sensors and seed."""
     v = cfg.vfs
     rng = np.random.default_rng(cfg.seed)
+    # the subject's fluctuation draws from a spawned child: spawning leaves ``rng``'s own stream
+    # as it was, so a steady subject (subject.enabled=false) draws exactly the data it always did
+    subject_rng = rng.spawn(1)[0]
     batches: list[dict[str, np.ndarray]] = []
     meta: dict[str, list] = {"kind": [], "stiffness": [], "payload": [], "trial": []}
     scenes: dict[str, str] = {}
@@ -164,7 +177,10 @@ def simulate_vfs(cfg: VirtualForceSensorConfig) -> VfsRecording:
         theta0, arm_q = scene.dynamics.ik(handle), scene.arm_posture(handle)
         act = relaxed_activation(scene, scene.initial_state(theta0, arm_q), cfg.arm.cocontraction)
         truth["arm"] = endpoint_truth(scene, scene.initial_state(theta0, arm_q, act)).as_dict()
-        add("arm", _stage(cfg, scene, theta0, v.arm_trials, v.range_deg, rng, v.band_hz, arm_q, act))
+        add(
+            "arm",
+            _stage(cfg, scene, theta0, v.arm_trials, v.range_deg, rng, v.band_hz, arm_q, act, subject_rng),
+        )
     channels = {k: np.concatenate([b[k] for b in batches]) for k in batches[0]}
     n_total = len(channels["theta"])
     trials = TrialSet(
