@@ -160,3 +160,17 @@ def test_referee_settings_of_another_protocol_are_refused(capsys, tmp_path):
         if p.diagnosis is not None and p.diagnosis.referee is not None:
             declared |= set(p.diagnosis.referee.settings)
     assert declared == {f.name for f in fields(RefereeConfig)}  # every field is someone's
+
+
+@pytest.mark.parametrize(
+    ("override", "says"),
+    [
+        ("capstan.id_ee_mass_kg=abc", "could not be converted to Float"),
+        ("seed=x", "could not be converted to Integer"),
+    ],
+)
+def test_a_mistyped_value_says_what_is_wrong_with_it(override, says):
+    # Hydra's own message is only "Error merging override ..."; the reason is in its cause
+    protocol = "virtual_force_sensor" if override.startswith("capstan") else "conditioning_window"
+    with pytest.raises(ConfigError, match=f"{override.split('=')[0]}.*{says}"):
+        compose([f"protocol={protocol}", override])

@@ -137,8 +137,20 @@ def compose(overrides: list[str]):
                 config_name=protocol.name, overrides=[o for o in rest if not o.startswith("hydra")]
             )
     except (HydraException, OmegaConfBaseException) as exc:
-        raise ConfigError(str(exc).strip().splitlines()[0]) from None
+        raise ConfigError(_first_lines(exc)) from None
     exp = to_experiment(cfg)
     if not isinstance(exp, protocol.schema) or not isinstance(exp, ExperimentConfig):
         raise ConfigError(f"composed config is a {type(exp).__name__}, not {protocol.schema.__name__}")
     return cfg, exp
+
+
+def _first_lines(exc: BaseException) -> str:
+    """The first line of ``exc`` and of its cause: Hydra's "Error merging override x=abc" alone
+    does not say what was wrong; its cause does ("Value 'abc' ... could not be converted to Float")."""
+    lines = [str(exc).strip().splitlines()[0]]
+    cause = exc.__cause__ or exc.__context__
+    if cause is not None and str(cause).strip():
+        first = str(cause).strip().splitlines()[0]
+        if first not in lines[0]:
+            lines.append(first)
+    return ": ".join(lines)
