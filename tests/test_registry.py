@@ -174,3 +174,18 @@ def test_a_mistyped_value_says_what_is_wrong_with_it(override, says):
     protocol = "virtual_force_sensor" if override.startswith("capstan") else "conditioning_window"
     with pytest.raises(ConfigError, match=f"{override.split('=')[0]}.*{says}"):
         compose([f"protocol={protocol}", override])
+
+
+@pytest.mark.parametrize(
+    ("protocol", "override", "valid"),
+    [
+        ("conditioning_window", "arm.nonexistent=1", "preload_N"),
+        ("conditioning_window", "+arm.foo=1", "cocontraction"),
+        ("virtual_force_sensor", "capstan.drag_stifness_N_per_m=1", "drag_stiffness_N_per_m"),
+        ("fractional_elbow", "motor.sensed_mass=0.1", "sensed_mass_kg"),
+    ],
+)
+def test_an_unknown_key_is_refused_with_the_keys_its_group_has(protocol, override, valid):
+    # Hydra says only "Key 'x' not in 'ArmConfig'" (and '+' would add the key silently)
+    with pytest.raises(ConfigError, match=f"has no key .*its keys: .*'{valid}'"):
+        compose([f"protocol={protocol}", override])

@@ -65,6 +65,8 @@ def _check(protocol: Protocol, overrides: list[str]) -> None:
                 f"{item}: {top!r} is not read by protocol {protocol.name!r}; its groups: {groups}"
                 f" (and {', '.join(keys)})"
             )
+        if "." in bare and top in groups:
+            _check_key_path(protocol, bare, item)
         if bare == "effects":
             names = [n.strip() for n in value.strip().strip("[]").split(",") if n.strip()]
             unknown = [n for n in names if n not in available_options("effects")]
@@ -85,6 +87,23 @@ def _check(protocol: Protocol, overrides: list[str]) -> None:
                 f"{item}: effect {parts[1]!r} is not switched on; add effects=[{parts[1]}] "
                 f"(selected: {selected or 'none'})"
             )
+
+
+def _check_key_path(protocol: Protocol, path: str, item: str) -> None:
+    """Refuse ``group.key[.subkey]`` when a key is not a field of the group's dataclass, naming the
+    fields it has (Hydra alone says only "Key 'x' not in 'ArmConfig'"). Stops at the first level
+    that is not a dataclass (dicts, lists and values hold free keys)."""
+    obj = protocol.schema()
+    walked: list[str] = []
+    for name in path.split("."):
+        if not is_dataclass(obj):
+            return
+        names = [f.name for f in fields(obj)]
+        if name not in names:
+            where = ".".join(walked)
+            raise ConfigError(f"{item}: {where!r} has no key {name!r}; its keys: {names}")
+        walked.append(name)
+        obj = getattr(obj, name)
 
 
 def check_effects(protocol: Protocol, cfg: ExperimentConfig) -> None:
@@ -147,7 +166,7 @@ def compose(overrides: list[str]):
 def _first_lines(exc: BaseException) -> str:
     """The first line of ``exc`` and of its cause: Hydra's "Error merging override x=abc" alone
     does not say what was wrong; its cause does ("Value 'abc' ... could not be converted to Float")."""
-    lines = [str(exc).strip().splitlines()[0]]
+    lines = [str(exc).strip().splitlines()[0].rstrip(".")]
     cause = exc.__cause__ or exc.__context__
     if cause is not None and str(cause).strip():
         first = str(cause).strip().splitlines()[0]
