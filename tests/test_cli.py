@@ -34,6 +34,8 @@ def test_group_override_selects_linear_arm():
         (["run", "protocol=nope"], "unknown protocol 'nope'; valid: ['conditioning_window', 'fractional_"),
         (["run", "reflex.stretch_latency_s=-0.01"], "reflex.stretch_latency_s must be positive"),
         (["run", "arm.muscle=foo"], "choose one of ['hill', 'linear']"),
+        (["run", "arm.q0=[0.08]"], "arm.q0 must be [shoulder, elbow] in rad (two angles), got [0.08]"),
+        (["run", "scenario.k_values=[]"], "scenario.k_values is empty"),
         (["run", "arm.nope=1"], "'arm' has no key 'nope'; its keys: ['model', 'muscle'"),
         (["frobnicate"], "unknown verb 'frobnicate'"),
         (["estimate", "/nonexistent/run"], "has no trials.h5"),

@@ -81,6 +81,7 @@ class ArmConfig:
             0.0 < self.cocontraction < 1.0, f"arm.cocontraction must lie in (0, 1), got {self.cocontraction}"
         )
         check(0.0 <= self.preload_N <= 50.0, f"arm.preload_N must lie in [0, 50] N, got {self.preload_N}")
+        check(len(self.q0) == 2, f"arm.q0 must be [shoulder, elbow] in rad (two angles), got {list(self.q0)}")
         check(0.0 < self.q0[1] < 2.6, f"arm.q0 elbow angle must lie in (0, 2.6) rad, got {self.q0[1]}")
         check(-0.7 < self.q0[0] < 2.3, f"arm.q0 shoulder angle must lie in (-0.7, 2.3) rad, got {self.q0[0]}")
 
@@ -188,6 +189,11 @@ class ScenarioConfig:
     n_trials: int | None = None  # trials per window; None = the scenario file's number
 
     def __post_init__(self) -> None:
+        if self.k_values is not None:
+            check(
+                len(self.k_values) > 0,
+                "scenario.k_values is empty; give window indices (e.g. [1,26]) or null for all",
+            )
         if self.n_trials is not None:
             check(
                 self.n_trials >= 2,
