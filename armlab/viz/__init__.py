@@ -18,12 +18,12 @@ from armlab.viz.figures import (
     plot_window_sweep,
 )
 from armlab.viz.fractional import (
-    format_fractional_table,
     plot_bode_fits,
     plot_bode_literature,
     plot_time_overlay,
 )
 from armlab.viz.fractional_recording import FRACTIONAL_SCALAR_CHANNELS, write_fractional_recording
+from armlab.viz.fractional_table import format_fractional_table
 from armlab.viz.joint import plot_joint_bode
 from armlab.viz.recording import (
     DEFAULT_SCALAR_CHANNELS,

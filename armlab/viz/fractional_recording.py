@@ -19,7 +19,7 @@ import numpy as np
 from armlab.data.trial import TrialSet
 from armlab.errors import ConfigError, DataError
 from armlab.viz._paths import fresh_path
-from armlab.viz.fractional import _num, format_fractional_table
+from armlab.viz.fractional_table import _num, format_fractional_table
 
 __all__ = ["FRACTIONAL_SCALAR_CHANNELS", "write_fractional_recording"]
 
