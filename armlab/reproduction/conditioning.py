@@ -38,7 +38,6 @@ from dataclasses import replace
 from pathlib import Path
 
 from armlab.errors import ArmlabError, ConfigError
-from armlab.protocols._files import new_dir, write_json, write_new
 from armlab.protocols.conditioning_window import PROTOCOL, ConditioningWindowConfig
 from armlab.protocols.conditioning_window.experiment import (
     PAPER_THRESHOLDS_S,
@@ -48,7 +47,7 @@ from armlab.protocols.conditioning_window.experiment import (
 )
 from armlab.reproduction._conditioning_text import CRITERIA, format_report
 from armlab.reproduction.conditioning_effects import effect_variants
-from armlab.reproduction.variants import Variant, candidate_variants
+from armlab.reproduction.variants import Variant, candidate_variants, write_study
 
 __all__ = [
     "PROTOCOL_NAME",
@@ -342,8 +341,4 @@ def run_published_conditioning(
     Raises:
         DataError: ``out_dir`` is not empty (checked before simulating; nothing is overwritten).
     """
-    out_dir = new_dir(out_dir)
-    result = diagnose_thresholds(cfg, variants, quick=quick)
-    write_json(out_dir / "results.json", result)
-    write_new(out_dir / "report.md", format_report(result))
-    return result
+    return write_study(out_dir, lambda: diagnose_thresholds(cfg, variants, quick=quick), format_report)

@@ -24,7 +24,6 @@ import time
 from pathlib import Path
 
 from armlab.errors import ArmlabError, ConfigError
-from armlab.protocols._files import new_dir, write_json, write_new
 from armlab.protocols.fractional_elbow import PROTOCOL, FractionalElbowConfig
 from armlab.protocols.fractional_elbow.experiment import (
     PAPER_FIG4,
@@ -32,7 +31,7 @@ from armlab.protocols.fractional_elbow.experiment import (
     estimate_fractional,
     simulate_fractional,
 )
-from armlab.reproduction.variants import Variant, variant
+from armlab.reproduction.variants import Variant, variant, write_study
 
 __all__ = [
     "FEATURE_SCALE",
@@ -278,8 +277,4 @@ def run_published_fractional(
     Raises:
         DataError: ``out_dir`` is not empty (checked before simulating; nothing is overwritten).
     """
-    out_dir = new_dir(out_dir)
-    result = diagnose_fractional(cfg, variants, quick=quick)
-    write_json(out_dir / "results.json", result)
-    write_new(out_dir / "report.md", format_report(result))
-    return result
+    return write_study(out_dir, lambda: diagnose_fractional(cfg, variants, quick=quick), format_report)

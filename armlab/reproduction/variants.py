@@ -10,12 +10,16 @@ Pure computation.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from dataclasses import dataclass, replace
+from pathlib import Path
 
 from armlab.config.schema import ExperimentConfig
 from armlab.errors import ConfigError
+from armlab.protocols._files import new_dir, write_json, write_new
 
 __all__ = [
+    "write_study",
     "COCONTRACTION_FACTORS",
     "CUFF_STIFFNESS_FACTORS",
     "LOWPASS_ALT_HZ",
@@ -151,3 +155,19 @@ def candidate_variants(cfg: ExperimentConfig) -> list[Variant]:
             [("estimator.lowpass_hz", LOWPASS_ALT_HZ)],
         ),
     ]
+
+
+def write_study(out_dir: Path, run: Callable[[], dict], format_report: Callable[[dict], str]) -> dict:
+    """Run a published-figure study and write its ``results.json`` and ``report.md`` into ``out_dir``.
+
+    ``out_dir`` is checked before ``run`` simulates anything: it must be new or empty (nothing is
+    overwritten).
+
+    Raises:
+        DataError: ``out_dir`` is not empty.
+    """
+    out_dir = new_dir(out_dir)
+    result = run()
+    write_json(out_dir / "results.json", result)
+    write_new(out_dir / "report.md", format_report(result))
+    return result

@@ -24,12 +24,11 @@ from scipy import stats
 
 from armlab.errors import ConfigError
 from armlab.models.spring_array import TABLE_I_PAYLOADS_KG, TABLE_I_STIFFNESS
-from armlab.protocols._files import new_dir, write_json, write_new
 from armlab.protocols.virtual_force_sensor import PROTOCOL, VirtualForceSensorConfig
 from armlab.protocols.virtual_force_sensor.experiment import simulate_vfs
 from armlab.protocols.virtual_force_sensor.results import METHODS, PAPER_TABLE_III, estimate_vfs
 from armlab.reproduction._vfs_text import format_report
-from armlab.reproduction.variants import variant
+from armlab.reproduction.variants import variant, write_study
 from armlab.reproduction.vfs_headlines import PAPER, ROLE, check, headlines
 
 __all__ = [
@@ -378,10 +377,10 @@ def run_published_vfs(
     Raises:
         DataError: ``out_dir`` is not empty (checked before simulating; nothing is overwritten).
     """
-    out_dir = new_dir(out_dir)
-    t0 = time.perf_counter()
-    result = diagnose_pattern(cfg, variants, quick=quick)
-    result["wall_s"] = time.perf_counter() - t0
-    write_json(out_dir / "results.json", result)
-    write_new(out_dir / "report.md", format_report(result))
-    return result
+
+    def run() -> dict:
+        t0 = time.perf_counter()
+        result = diagnose_pattern(cfg, variants, quick=quick)
+        return {**result, "wall_s": time.perf_counter() - t0}
+
+    return write_study(out_dir, run, format_report)
