@@ -29,6 +29,7 @@ from scipy import signal
 from armlab.errors import ConfigError, DataError
 
 __all__ = [
+    "lowpass_noise",
     "butterworth",
     "five_point_derivatives",
     "lowpass_causal",
@@ -312,3 +313,33 @@ def five_point_derivatives(x: np.ndarray, fs_hz: float, axis: int = -2) -> tuple
     xd[2:-2] = (-xm[4:] + 8.0 * xm[3:-1] - 8.0 * xm[1:-3] + xm[:-4]) / (12.0 * dt)
     xdd[2:-2] = (-xm[4:] + 16.0 * xm[3:-1] - 30.0 * xm[2:-2] + 16.0 * xm[1:-3] - xm[:-4]) / (12.0 * dt * dt)
     return np.moveaxis(xd, 0, axis), np.moveaxis(xdd, 0, axis)
+
+
+def lowpass_noise(
+    rng: np.random.Generator,
+    shape: tuple[int, ...],
+    fs_hz: float,
+    corner_hz: float,
+    *,
+    burn_in_periods: float,
+    name: str = "corner_hz",
+) -> np.ndarray:
+    """Unit-rms Gaussian noise through a 2nd-order Butterworth low-pass, stationary from sample 0.
+
+    White noise of ``shape`` (time on axis 1), lengthened by a burn-in of
+    ``burn_in_periods / corner_hz`` s that is filtered and dropped, is drawn as one
+    ``rng.standard_normal`` call and divided by the filter's exact white-noise gain (the rms of
+    its impulse response over 20 corner periods), so its stationary rms is 1.
+
+    Raises:
+        ConfigError: ``corner_hz`` not in (0, fs_hz / 2), the message naming it as ``name``.
+    """
+    if not 0 < corner_hz < fs_hz / 2:
+        raise ConfigError(f"{name} must lie in (0, {fs_hz / 2}) Hz (Nyquist), got {corner_hz}")
+    sos = butterworth(corner_hz, fs_hz, 2)
+    n_burn = int(math.ceil(burn_in_periods * fs_hz / corner_hz))
+    impulse = np.zeros(int(math.ceil(20.0 * fs_hz / corner_hz)))
+    impulse[0] = 1.0
+    gain = math.sqrt(float(np.sum(signal.sosfilt(sos, impulse) ** 2)))  # output std per unit input
+    white = rng.standard_normal((shape[0], n_burn + shape[1], *shape[2:]))
+    return signal.sosfilt(sos, white, axis=1)[:, n_burn:] / gain

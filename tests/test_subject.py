@@ -76,3 +76,10 @@ def test_the_same_seed_gives_bit_identical_fluctuating_trials():
     # a steady subject holds the hold's activation: no fluctuation before onset
     act = steady.channels["true_activation"][:, :250]
     assert np.allclose(act, act[:, :1], atol=1e-6)
+
+
+def test_a_fluctuation_corner_above_nyquist_is_a_config_error():
+    # SubjectConfig accepts up to 50 Hz; at a 100 Hz sample rate that is the Nyquist frequency
+    subject = SubjectConfig(enabled=True, fluctuation_cv=0.03, fluctuation_hz=50.0)
+    with pytest.raises(ConfigError, match=r"subject.fluctuation_hz must lie in \(0, 50.0\) Hz"):
+        activation_commands(np.array([0.1]), subject, 1, 100, 1, 100.0, np.random.default_rng(0))

@@ -55,7 +55,7 @@ from mujoco import rollout as mj_rollout
 from scipy import interpolate, signal
 
 from armlab.config.effects import EffectsConfig, Reflex, enabled_effects
-from armlab.dsp import butterworth, second_order_ba, second_order_lowpass
+from armlab.dsp import lowpass_noise, second_order_ba, second_order_lowpass
 from armlab.errors import ConfigError, DataError, SimulationError
 from armlab.models.joint_rig_scene import Joint1DofScene, JointSubject, build_joint_rig_scene
 from armlab.sensors.channel import ChannelSpec, apply_channel
@@ -171,18 +171,14 @@ def activation_fluctuation(
     Returns:
         (n_trials, n_samples) 1, drawn as one ``rng.standard_normal`` call.
     """
-    if not 0 < bandwidth_hz < fs_hz / 2:
-        raise ConfigError(
-            "effects.cocontraction_variation.bandwidth_hz must lie in "
-            f"(0, {fs_hz / 2}) Hz (Nyquist), got {bandwidth_hz}"
-        )
-    sos = butterworth(bandwidth_hz, fs_hz, 2)
-    n_burn = int(math.ceil(_BURN_IN_PERIODS * fs_hz / bandwidth_hz))
-    impulse = np.zeros(int(math.ceil(20.0 * fs_hz / bandwidth_hz)))
-    impulse[0] = 1.0
-    gain = math.sqrt(float(np.sum(signal.sosfilt(sos, impulse) ** 2)))  # std of the output per unit input
-    white = rng.standard_normal((n_trials, n_burn + n_samples))
-    n = signal.sosfilt(sos, white, axis=1)[:, n_burn:] / gain
+    n = lowpass_noise(
+        rng,
+        (n_trials, n_samples),
+        fs_hz,
+        bandwidth_hz,
+        burn_in_periods=_BURN_IN_PERIODS,
+        name="effects.cocontraction_variation.bandwidth_hz",
+    )
     return np.maximum(1.0 + depth * n, 0.0)
 
 

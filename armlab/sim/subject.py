@@ -7,9 +7,9 @@ draws it from the run's seeded generator, vectorised over trials, samples and mu
 from __future__ import annotations
 
 import numpy as np
-from scipy.signal import butter, sosfilt
 
 from armlab.config.subject import SubjectConfig
+from armlab.dsp import lowpass_noise
 
 __all__ = ["BURN_IN_PERIODS", "activation_commands"]
 
@@ -47,14 +47,14 @@ def activation_commands(
     n_mus = base.shape[0]
     n_samples = -(-n_steps // substeps)
     eta = rng.standard_normal(n_trials)
-    burn = int(np.ceil(BURN_IN_PERIODS * fs_hz / subject.fluctuation_hz))
-    sos = butter(2, subject.fluctuation_hz, fs=fs_hz, output="sos")
-    white = rng.standard_normal((n_trials, burn + n_samples, n_mus))
-    eps = sosfilt(sos, white, axis=1)[:, burn:]
-    # unit variance: the filter's white-noise power gain, from its impulse response
-    impulse = np.zeros(int(20 * fs_hz / subject.fluctuation_hz))
-    impulse[0] = 1.0
-    eps /= np.sqrt(np.sum(sosfilt(sos, impulse) ** 2))
+    eps = lowpass_noise(
+        rng,
+        (n_trials, n_samples, n_mus),
+        fs_hz,
+        subject.fluctuation_hz,
+        burn_in_periods=BURN_IN_PERIODS,
+        name="subject.fluctuation_hz",
+    )
     rel = 1.0 + subject.trial_cv * eta[:, None, None] + subject.fluctuation_cv * eps
     cmd = np.clip(base * rel, 0.0, 1.0)
     return np.repeat(cmd, substeps, axis=1)[:, :n_steps]
