@@ -20,8 +20,6 @@ from armlab.errors import ArmlabError, ConfigError
 
 __all__ = ["main"]
 
-VERBS = ("run", "estimate", "view", "diagnose", "effects", "diagnose-benchmark")
-
 
 def _fail(msg: str) -> int:
     print(f"armlab: error: {msg}", file=sys.stderr)

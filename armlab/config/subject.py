@@ -9,11 +9,13 @@ the conditioning paper's thresholds are marked *calibrated* with the figure they
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
+from types import MappingProxyType
 
 from armlab.config.validate import check
 
-__all__ = ["SubjectConfig"]
+__all__ = ["PAPER000_SUBJECT", "SubjectConfig"]
 
 
 @dataclass(kw_only=True)
@@ -59,3 +61,12 @@ class SubjectConfig:
     def active(self) -> bool:
         """Whether any fluctuation reaches the muscles."""
         return self.enabled and (self.fluctuation_cv > 0 or self.trial_cv > 0)
+
+
+#: The subject of the conditioning lab (seeds/000), the one place its values are written:
+#: fluctuation_cv (3.5 %) calibrated there on the quasi-symmetric threshold (370 ms, Fig. 4),
+#: fluctuation_hz and trial_cv fixed from the literature (sources above). The other labs reuse it
+#: unchanged (cross-paper checks); read-only.
+PAPER000_SUBJECT: Mapping[str, float | bool] = MappingProxyType(
+    {"enabled": True, "fluctuation_cv": 0.035, "fluctuation_hz": 2.0, "trial_cv": 0.1}
+)

@@ -5,7 +5,7 @@ thresholds (see armlab/protocols/conditioning_window/config.py for magnitudes an
 soft tissue between cuff and bone (cuff 20 kN/m -> 3 kN/m), the subject's within-trial activation
 fluctuation and the trial-to-trial variation of co-contraction. It also reads the paper's reduced
 model as the paper does (xi from the full identification) and judges quasi-constancy per second
-of T_obs. :func:`before_lab` is the lab as it was before; :func:`effect_variants` removes each
+of T_obs. :data:`BEFORE_SETTINGS` is the lab as it was before; :func:`effect_variants` removes each
 effect from the default and adds each to the earlier lab, one at a time.
 """
 
@@ -14,7 +14,7 @@ from __future__ import annotations
 from armlab.config.schema import ExperimentConfig
 from armlab.reproduction.variants import Variant, variant
 
-__all__ = ["BEFORE_SETTINGS", "before_lab", "effect_variants"]
+__all__ = ["BEFORE_SETTINGS", "effect_variants"]
 
 #: the lab before issue 17: an assumed 20 kN/m cuff, an ideal subject, xi of the reduced model
 #: from the model's truth, quasi-constancy per window step
@@ -25,11 +25,6 @@ BEFORE_SETTINGS: tuple[tuple[str, object], ...] = (
     ("estimator.xi_source", "truth"),
     ("estimator.constancy_tol_per_s", None),
 )
-
-
-def before_lab(cfg: ExperimentConfig) -> ExperimentConfig:
-    """``cfg`` with the lab's settings as before issue 17 (everything else kept)."""
-    return Variant(name="before", effect="added", description="", set_values=BEFORE_SETTINGS).apply(cfg)
 
 
 def _without(paths: tuple[str, ...]) -> list[tuple[str, object]]:

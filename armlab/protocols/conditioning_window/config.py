@@ -21,7 +21,7 @@ from armlab.config.schema import (
     RobotConfig,
     ScenarioConfig,
 )
-from armlab.config.subject import SubjectConfig
+from armlab.config.subject import PAPER000_SUBJECT, SubjectConfig
 
 __all__ = [
     "CUFF_DAMPING_NS_PER_M",
@@ -45,7 +45,7 @@ CUFF_DAMPING_NS_PER_M = 46.0
 # literature range (seed 0, cuff as above: 0.03 -> 310 ms, 0.035 and 0.0375 -> 350 ms, 0.04 ->
 # never, the 500 ms extension window then staying skew; 0.035 is the closest to 370 ms);
 # fluctuation_hz and trial_cv fixed from the literature, not calibrated.
-SUBJECT = {"enabled": True, "fluctuation_cv": 0.035, "fluctuation_hz": 2.0, "trial_cv": 0.1}
+SUBJECT = PAPER000_SUBJECT
 # Criteria tolerances (section IV-D names the criteria but gives no tolerance):
 # quasi-symmetric when |A - A^T|_F / |A + A^T|_F < 0.1 for K and D: a 10 % skew part, i.e. the
 # off-diagonal pair differing by ~30 % of its mean for K ~ [[15, 6], [6, 16]] N m/rad; armlab's

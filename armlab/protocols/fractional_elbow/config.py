@@ -12,7 +12,7 @@ from armlab.config.schema import (
     ReflexConfig,
     ScenarioConfig,
 )
-from armlab.config.subject import SubjectConfig
+from armlab.config.subject import PAPER000_SUBJECT, SubjectConfig
 
 __all__ = ["SUBJECT", "FractionalElbowConfig"]
 
@@ -25,7 +25,7 @@ __all__ = ["SUBJECT", "FractionalElbowConfig"]
 # to the paper's order but not the ranking or alpha (28), and its low-frequency angle noise takes
 # the measured Fig. 4 (the calibration figure) out of its targets (DC -45.0 dB, the largest |G| at
 # 0.56 Hz); docs/reproduction/fractional_elbow.md. `subject.enabled=true` switches it on.
-SUBJECT = {"enabled": False, "fluctuation_cv": 0.035, "fluctuation_hz": 2.0, "trial_cv": 0.1}
+SUBJECT = {**PAPER000_SUBJECT, "enabled": False}
 
 
 @dataclass(kw_only=True)

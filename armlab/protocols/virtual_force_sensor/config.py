@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 from armlab.config.schema import ArmConfig, CapstanConfig, ExperimentConfig, VfsConfig
-from armlab.config.subject import SubjectConfig
+from armlab.config.subject import PAPER000_SUBJECT, SubjectConfig
 
 __all__ = ["SUBJECT", "VirtualForceSensorConfig"]
 
@@ -15,7 +15,7 @@ __all__ = ["SUBJECT", "VirtualForceSensorConfig"]
 # (2 Hz) and trial_cv (10 %) were fixed from the literature: a cross-paper calibration, NOT
 # re-tuned here. Checked on this paper's Table V (arm VAF 90.2-94.5 %); no figure of this paper
 # sets them.
-SUBJECT = {"enabled": True, "fluctuation_cv": 0.035, "fluctuation_hz": 2.0, "trial_cv": 0.1}
+SUBJECT = PAPER000_SUBJECT
 
 
 @dataclass(kw_only=True)
