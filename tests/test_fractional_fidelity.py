@@ -42,7 +42,7 @@ def test_fig4_resonance_and_15_hz_phase_meet_the_issue_targets(default_run):
     assert lo - 0.5 <= m["dc_db"] <= hi, m
 
 
-def test_the_old_lab_misses_fig4_so_the_test_above_can_fail(default_run):
+def test_the_intrinsic_truth_alone_misses_fig4_so_the_test_above_can_fail(default_run):
     # the intrinsic truth (reflex excluded) has no resonance: the peak is the reflex loop's
     t = default_run["fig4_features"]["truth"]
     assert t["peak_db"] < 0.5 and t["dc_db"] > -45.0, t

@@ -98,15 +98,30 @@ def test_the_subject_has_its_own_stream(runs):
     np.testing.assert_array_equal(again.channels["theta_measured"], moving.channels["theta_measured"])
 
 
-def test_table_I_check_with_the_default_lab_plus_the_subject():
-    """The check of docs/reproduction/fractional_elbow.md (default lab + subject, seed 0): the
-    residuals reach the paper's size (R² 0.83-0.86, paper 0.80-0.94; steady subject 0.94-0.99),
-    alpha (29) falls in 1.1 +- 0.2, but (28) still fits best and alpha (28) is 1.2 (paper 1.4 +- 0.1),
-    and the low-frequency angle noise lifts the measured DC gain out of Fig. 4's band."""
+@pytest.fixture(scope="module")
+def subject_table_I():
     cfg = compose(["protocol=fractional_elbow", "subject.enabled=true"])[1]
     rec = simulate_fractional(cfg)
     res = estimate_fractional(rec.trials, cfg.frf, rec.truth)[0]
-    checks = table_I_checks(res["models"])
+    return res, table_I_checks(res["models"])
+
+
+def test_table_I_check_with_the_default_lab_plus_the_subject(subject_table_I):
+    """The check of docs/reproduction/fractional_elbow.md (default lab + subject, seed 0): the
+    residuals reach the paper's size (R² 0.83-0.86, paper 0.80-0.94; steady subject 0.94-0.99),
+    alpha (29) falls in 1.1 +- 0.2, and the low-frequency angle noise lifts the measured DC gain out
+    of Fig. 4's band (why the subject stays off in this lab)."""
+    res, checks = subject_table_I
     assert 0.80 <= min(checks["r2"]) and max(checks["r2"]) <= 0.94, checks
-    assert checks["alpha_29_ok"] and not checks["alpha_28_ok"] and not checks["ranking_as_paper"], checks
+    assert checks["alpha_29_ok"], checks
     assert res["fig4_features"]["measured"]["dc_db"] > -46.0  # paper -49.1...-46.0 (steady: -49.2)
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="with the subject, (28) still fits best and alpha (28) is 1.2 (paper 1.4 +- 0.1): "
+    "docs/reproduction/fractional_elbow.md",
+)
+def test_the_subject_brings_table_I_ranking_and_alpha_28(subject_table_I):
+    _, checks = subject_table_I
+    assert checks["alpha_28_ok"] and checks["ranking_as_paper"], checks
