@@ -46,11 +46,11 @@ _STARTS = ("rest", "steady", "deviation")
 
 
 def butterworth(
-    cutoff_hz: float,
+    cutoff_hz: float | tuple[float, float],
     fs_hz: float,
     order: int,
     *,
-    btype: Literal["low", "high"] = "low",
+    btype: Literal["low", "high", "bandpass"] = "low",
     output: Literal["sos", "ba"] = "sos",
 ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     """Digital Butterworth filter by the bilinear transform with pre-warping (``scipy.signal.butter``).
@@ -59,10 +59,10 @@ def butterworth(
     their own (``cutoff_hz`` must lie in (0, fs_hz / 2), else scipy raises ``ValueError``).
 
     Args:
-        cutoff_hz: Hz, -3 dB frequency.
+        cutoff_hz: Hz, -3 dB frequency; ``(low, high)`` for a band-pass.
         fs_hz: Hz, sample rate.
-        order: filter order, >= 1.
-        btype: ``"low"`` (low-pass) or ``"high"`` (high-pass).
+        order: filter order, >= 1 (a band-pass has twice as many poles).
+        btype: ``"low"`` (low-pass), ``"high"`` (high-pass) or ``"bandpass"``.
         output: ``"sos"`` for (n_sections, 6) second-order sections, ``"ba"`` for the transfer
             function's ``(b, a)`` coefficient vectors (order + 1,) each.
 

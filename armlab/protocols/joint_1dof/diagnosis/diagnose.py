@@ -10,12 +10,12 @@ from __future__ import annotations
 from dataclasses import asdict
 
 import numpy as np
-from scipy import signal
 
 from armlab.config.diagnosis import DiagnosisConfig
 from armlab.diagnosis.attribution import held_out_gap, select_candidates, select_effects
 from armlab.diagnosis.families import FittedModel
 from armlab.diagnosis.localise import band_breakdown, frf_parameters, residual_tests, window_breakdown
+from armlab.dsp import zero_phase
 from armlab.protocols.joint_1dof.diagnosis.data import highpass_sos, noise_floor, prepare_trials
 from armlab.protocols.joint_1dof.diagnosis.models import JOINT_FAMILY, JOINT_SURROGATES
 from armlab.protocols.joint_1dof.diagnosis.rules import RULES
@@ -79,7 +79,7 @@ def prepare_scoring(records, cfg: DiagnosisConfig, **kw):
         **kw,
     )
     hp = highpass_sos(trials[0].fs_hz, cfg.highpass_hz)
-    return trials, hp, [signal.sosfiltfilt(hp, tr.y) for tr in trials]
+    return trials, hp, [zero_phase(hp, tr.y) for tr in trials]
 
 
 def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:

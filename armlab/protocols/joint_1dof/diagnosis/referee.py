@@ -22,11 +22,11 @@ import math
 from pathlib import Path
 
 import numpy as np
-from scipy import signal
 
 from armlab.config.diagnosis import DiagnosisConfig, RefereeConfig
 from armlab.config.effects import EFFECTS, EffectsConfig
 from armlab.diagnosis.scoring import Dataset, log_uniform
+from armlab.dsp import butterworth, zero_phase
 
 __all__ = [
     "JOINT_CLASSES",
@@ -73,8 +73,8 @@ def _effects_for(hidden: tuple[str, ...], rng) -> tuple[EffectsConfig, dict]:
 
 
 def _band_rms(z: np.ndarray, fs: float, lo: float, hi: float) -> float:
-    sos = signal.butter(4, [lo, hi], btype="bandpass", fs=fs, output="sos")
-    return float(np.sqrt(np.mean(signal.sosfiltfilt(sos, z, axis=-1) ** 2)))
+    sos = butterworth((lo, hi), fs, 4, btype="bandpass")
+    return float(np.sqrt(np.mean(zero_phase(sos, z, axis=-1) ** 2)))
 
 
 def describe(ref: RefereeConfig) -> str:
