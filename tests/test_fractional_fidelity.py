@@ -8,12 +8,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from armlab.estimation.levy import PAPER_STRUCTURES
+from armlab.estimation.levy import PAPER_STRUCTURES, levy_sweep
 from armlab.models.tf_structures import LITERATURE_MODELS, PUBLISHED_BANDWIDTH_HZ, CommensurateTF
 from armlab.protocols.compose import compose
 from armlab.protocols.fractional_elbow.experiment import (
     PAPER_FIG4,
-    _sweep,
     estimate_fractional,
     simulate_fractional,
 )
@@ -90,6 +89,8 @@ def test_an_unstable_best_order_is_rejected_and_named():
     model = CommensurateTF(b=np.array([0.004]), a=np.array([1.0, 1e-3, 1e-4]), alpha=1.9)
     assert not model.is_stable
     f = np.linspace(0.12, 15.0, 134)
-    kept, rejected = _sweep(f, model.response(f), PAPER_STRUCTURES["29"], np.round(np.arange(1, 20) * 0.1, 1))
-    assert rejected is not None and rejected["alpha"] == pytest.approx(1.9) and not rejected["stable"]
+    alphas = np.round(np.arange(1, 20) * 0.1, 1)
+    sweep = levy_sweep(f, model.response(f), PAPER_STRUCTURES["29"], alphas=alphas, stable_only=False)
+    kept, rejected = sweep.stable_choice()
+    assert rejected is not None and rejected.alpha == pytest.approx(1.9) and not rejected.stable
     assert kept.stable and kept.alpha != pytest.approx(1.9)

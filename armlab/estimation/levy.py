@@ -225,6 +225,21 @@ class LevySweep:
     fits: tuple[LevyFit, ...]
     criterion: str
 
+    def stable_choice(self) -> tuple[LevyFit, LevyFit | None]:
+        """(the best *stable* fit by :attr:`criterion`, the better unstable fit it displaced or None).
+
+        Never drops an unstable fit silently: when the overall best is unstable it is returned
+        second, to be reported as rejected. With no stable fit at all, the overall best is kept
+        (its ``stable`` is False, for the caller to mark).
+        """
+        score = np.array([getattr(ft.indices, self.criterion) for ft in self.fits])
+        score = -score if self.criterion == "r2" else score
+        ok = np.array([ft.stable for ft in self.fits]) & np.isfinite(score)
+        if not np.any(ok):
+            return self.best, None
+        kept = self.fits[int(np.flatnonzero(ok)[np.argmin(score[ok])])]
+        return kept, (None if self.best is kept or self.best.stable else self.best)
+
 
 def _check_data(f_hz, G, n_params: int) -> tuple[np.ndarray, np.ndarray]:
     f = np.asarray(f_hz, dtype=float)

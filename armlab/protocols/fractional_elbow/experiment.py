@@ -224,19 +224,6 @@ def effective_arm(f_hz: np.ndarray, Y: np.ndarray, inertia: float) -> tuple[floa
     return K, D
 
 
-def _sweep(f: np.ndarray, G: np.ndarray, structure, alphas: np.ndarray) -> tuple[LevyFit, dict | None]:
-    """The alpha sweep under :data:`STABILITY_RULE`: (kept fit, the rejected unstable one or None)."""
-    sweep = levy_sweep(f, G, structure, alphas=alphas, stable_only=False)
-    stable = [ft for ft in sweep.fits if ft.stable and np.isfinite(ft.indices.mse)]
-    if not stable:  # nothing stable: the best is reported, marked unstable (stable = False)
-        return sweep.best, None
-    kept = min(stable, key=lambda ft: ft.indices.mse)
-    best = sweep.best
-    if best is kept or best.stable:
-        return kept, None
-    return kept, {"alpha": float(best.alpha), "mse": best.indices.mse, "stable": False}
-
-
 def _fit_entry(fit: LevyFit, truth_g: np.ndarray | None, f: np.ndarray) -> dict:
     out = fit.summary()
     if truth_g is not None:  # |fit| against |truth| on the same band, relative RMS
@@ -296,7 +283,11 @@ def estimate_fractional(
         if structure.alpha is not None:
             fit = levy_fit(f, G, structure)
         else:
-            fit, rejected[key] = _sweep(f, G, structure, alpha_grid(frf_cfg.alpha_step))
+            sweep = levy_sweep(f, G, structure, alphas=alpha_grid(frf_cfg.alpha_step), stable_only=False)
+            fit, worse = sweep.stable_choice()  # STABILITY_RULE
+            rejected[key] = None
+            if worse is not None:
+                rejected[key] = {"alpha": float(worse.alpha), "mse": worse.indices.mse, "stable": False}
         fits[key] = fit
     entries = {k: _fit_entry(v, truth_g, f) for k, v in fits.items()}
     for key, rej in rejected.items():
