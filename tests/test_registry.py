@@ -153,9 +153,9 @@ def test_referee_settings_of_another_protocol_are_refused(capsys, tmp_path):
     assert "'referee.force_noise_N'" in err and not (tmp_path / "b").exists()
     from dataclasses import fields
 
-    from armlab.config.diagnosis import RefereeConfig
+    from armlab.config.diagnosis import REFEREE_SHARED_FIELDS, RefereeConfig
 
-    declared = {"protocol", "replicates", "seed", "classes", "jobs"}
+    declared = set(REFEREE_SHARED_FIELDS)
     for p in registry.protocols():
         if p.diagnosis is not None and p.diagnosis.referee is not None:
             declared |= set(p.diagnosis.referee.settings)

@@ -12,6 +12,7 @@ from armlab.errors import ConfigError
 
 __all__ = [
     "DiagnosisConfig",
+    "REFEREE_SHARED_FIELDS",
     "RefereeConfig",
     "register_diagnosis_configs",
 ]
@@ -71,6 +72,11 @@ class DiagnosisConfig:
             )
         fill = {k: v for k, v in rules.items() if getattr(self, k) is None}
         return replace(self, **fill)
+
+
+#: the RefereeConfig fields every referee reads; the others belong to one referee each
+#: (``Referee.settings`` of its protocol)
+REFEREE_SHARED_FIELDS = ("protocol", "replicates", "seed", "classes", "jobs")
 
 
 @dataclass(kw_only=True)

@@ -49,6 +49,7 @@ def _check(protocol: Protocol, overrides: list[str]) -> None:
     groups = config_groups(protocol)
     keys = [f.name for f in fields(protocol.schema) if f.name not in groups and f.name != "protocol_name"]
     seen: dict[str, str] = {}
+    selected: list[str] = []  # the effects switched on by effects=[...]
     for item in overrides:
         key, sep, value = item.partition("=")
         if not sep:
@@ -69,17 +70,12 @@ def _check(protocol: Protocol, overrides: list[str]) -> None:
             _check_key_path(protocol, bare, item)
         if bare == "effects":
             names = [n.strip() for n in value.strip().strip("[]").split(",") if n.strip()]
+            selected += names
             unknown = [n for n in names if n not in available_options("effects")]
             if unknown:
                 raise ConfigError(f"unknown effect(s) {unknown}; valid: {available_options('effects')}")
         elif bare in groups and "." not in bare and value not in available_options(bare):
             raise ConfigError(f"unknown {bare} {value!r}; valid: {available_options(bare)}")
-    selected = [
-        n.strip()
-        for o in overrides
-        if o.lstrip("+").startswith("effects=")
-        for n in o.partition("=")[2].strip("[] ").split(",")
-    ]
     for item in overrides:
         parts = item.partition("=")[0].split(".")
         if parts[0] == "effects" and len(parts) > 2 and parts[1] not in selected:

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from armlab.config.diagnosis import DiagnosisConfig, RefereeConfig
+from armlab.config.diagnosis import REFEREE_SHARED_FIELDS, DiagnosisConfig, RefereeConfig
 from armlab.config.store import apply_overrides
 from armlab.errors import ConfigError, DataError
 from armlab.protocols import registry
@@ -103,7 +103,7 @@ def run_benchmark(overrides: list[str] | None, out_dir: Path) -> tuple[Path, dic
         ref = replace(ref, protocol=registry.DEFAULT_REFEREE)
     diag_cfg = apply_overrides(DiagnosisConfig(), "diagnosis", diag_items)
     referee = registry.get(ref.protocol, need="referee").diagnosis.referee
-    shared = ("protocol", "replicates", "seed", "classes", "jobs")
+    shared = REFEREE_SHARED_FIELDS
     foreign = [
         o for o in ref_items if o.partition("=")[0].split(".", 1)[1] not in (*shared, *referee.settings)
     ]
@@ -126,6 +126,5 @@ def run_benchmark(overrides: list[str] | None, out_dir: Path) -> tuple[Path, dic
     summary["timing_s"] = time.perf_counter() - t0
     summary["median_diagnosis_s"] = float(np.median([c["seconds"] for c in cases]))
     write_json(out / "benchmark.json", {"summary": summary, "cases": cases})
-    describe = registry.get(ref.protocol, need="referee").diagnosis.referee.describe
-    write_new(out / "benchmark.md", format_benchmark(summary, ref, describe(ref)))
+    write_new(out / "benchmark.md", format_benchmark(summary, ref, referee.describe(ref)))
     return out, summary
