@@ -24,16 +24,36 @@ import mujoco
 import numpy as np
 
 from armlab.config.schema import DirectDriveConfig, ElbowConfig, ReflexConfig
-from armlab.errors import ConfigError, SimulationError
+from armlab.errors import ConfigError
 from armlab.models.direct_drive_scene import DirectDriveScene
 from armlab.models.oustaloup import FractionalElement
 from armlab.sensors.channel import ChannelSpec
 from armlab.sim.rollout import reflex_command
+from armlab.sim.stability import TrialLabels, warning_counts
 
 __all__ = [
+    "FORCE_LOOP_HINT",
+    "GRASP_FORCE_BOUND_N",
+    "SATURATION_DUTY_MAX",
     "ForceTrial",
     "simulate_force_trial",
 ]
+
+# N, largest grasp force between hand and handle of a valid trial: the reference never exceeds
+# 5 N (seeds/004 Sec. III-A) and the motor's peak torque (12.34 A x K_t over L = 0.35 m) pushes
+# at most ~48 N statically; the default runs peak at 4.7 N (20x margin).
+GRASP_FORCE_BOUND_N = 100.0
+# 1, largest fraction of a trial's control periods with the current at its limit: a force loop
+# whose amplifier saturates no longer applies its reference (the paper's <= 5 N multisine needs
+# ~1.6 A of the 12.34 A); the default runs never saturate (0 %), an unstable loop sits there most
+# of the time (motor.inertia_error=0.5: 88 %).
+SATURATION_DUTY_MAX = 0.05
+_SATURATION_RUN_S = 0.1  # s at the limit without a break: the loop is lost (a failure at once)
+#: What to change when the force loop is unstable.
+FORCE_LOOP_HINT = (
+    "lower motor.inertia_error (M_hat must stay below the true inertia), motor.kp or motor.ki_per_s, "
+    "or the force peak (docs/reliability.md, Instability)"
+)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -89,6 +109,8 @@ def simulate_force_trial(
     rng: np.random.Generator,
     accel_noise_rad_s2: float = 0.0,
     muscle_base: np.ndarray | None = None,
+    who: TrialLabels | None = None,
+    trial: int = 0,
 ) -> ForceTrial:
     """Simulate one trial: ``settle_s`` of hold at zero force, then ``f_ref`` (recorded).
 
@@ -107,15 +129,21 @@ def simulate_force_trial(
         muscle_base: (n_settle + n, n_muscles) the muscles' commands before the reflex at every
             control period, settle included (a subject whose activation fluctuates, see
             :mod:`armlab.sim.subject`); None: ``elbow.cocontraction`` throughout.
+        who, trial: the trials of the run and this one's index, named in a SimulationError.
 
     Returns:
         The recorded :class:`ForceTrial`.
 
     Raises:
-        SimulationError: the motor angle left ``motor.safety_range_rad``, or the state diverged.
+        SimulationError: the motor angle left ``motor.safety_range_rad``; the state diverged
+            (MuJoCo warned or reset it); the grasp force passed :data:`GRASP_FORCE_BOUND_N`; the
+            current stayed at its limit for 0.1 s, or for more than :data:`SATURATION_DUTY_MAX` of
+            the trial. Times are from the reference's start (negative while settling).
     """
     m = scene.model
     dt = 1.0 / fs_hz
+    if who is None:
+        who = TrialLabels(protocol="force control", labels=("the trial",), hint=FORCE_LOOP_HINT)
     substeps = int(round(dt / m.opt.timestep))
     if substeps < 1 or abs(substeps * m.opt.timestep - dt) > 1e-9:
         raise ConfigError(
@@ -176,21 +204,34 @@ def simulate_force_trial(
     kg, dg = scene.grasp_k, scene.grasp_d
     qm, qe = scene.motor_qpos, scene.elbow_qpos
     sl_acc = scene.sensors["handle_acc"]
-    saturated, n_saturate = 0, int(round(0.1 * fs_hz))  # 0.1 s at the current limit = failure
+    n_saturate = int(round(_SATURATION_RUN_S * fs_hz))
+    max_saturated = SATURATION_DUTY_MAX * total
+    saturated = n_saturated = 0
+    h = m.opt.timestep
     theta_prev = e_prev = v_f = v_raw_prev = integ = de_f = de_raw_prev = 0.0
     for k in range(total):
         t = k * dt
+        when = (k - n_settle) * dt
         theta = float(data.qpos[qm])
         if not abs(theta) <= motor.safety_range_rad:
-            when = (k - n_settle) * dt
-            raise SimulationError(
-                f"the motor angle reached {theta:+.3f} rad at t = {when:.3f} s, outside the safety range "
+            raise who.error(
+                trial,
+                when,
+                f"the motor angle reached {theta:+.3f} rad, outside the safety range "
                 f"±{motor.safety_range_rad} rad; the trial is aborted (lower the force peak, raise the "
-                "co-contraction or the arm stiffness)"
+                "co-contraction or the arm stiffness)",
+                state="aborted",
             )
         psi = float(data.sensordata[sl_psi][0])
         psid = float(data.sensordata[sl_psid][0])
         f_true = -(kg * psi + dg * psid) / L
+        if not abs(f_true) <= GRASP_FORCE_BOUND_N:
+            raise who.error(
+                trial,
+                when,
+                f"grasp force |{f_true:.4g}| N beyond its {GRASP_FORCE_BOUND_N:g} N bound (the reference "
+                "stays within 5 N, the motor pushes at most ~48 N)",
+            )
         # the sensor also carries the handle mass beyond its measuring plane (tangential a_y)
         f_sensor = f_true + motor.sensed_mass_kg * float(data.sensordata[sl_acc][1])
         f_meas = _measure(f_sensor, k, f_noise, f_bias, f_drift, t, force_spec.quant_step)
@@ -213,13 +254,25 @@ def simulate_force_trial(
         u_force = ref[k] + motor.kp * e + motor.ki_per_s * integ + motor.kd_s * de_f
         current = (tau_dym + L * u_force) / kt
         current = min(max(round(current / i_lsb) * i_lsb, -i_max), i_max)
-        saturated = saturated + 1 if abs(current) >= i_max else 0
+        if abs(current) >= i_max:
+            saturated += 1
+            n_saturated += 1
+        else:
+            saturated = 0
         if saturated > n_saturate:
-            raise SimulationError(
-                f"the motor current stayed at its ±{i_max:.2f} A limit for {n_saturate / fs_hz:.2f} s "
-                f"(t = {(k - n_settle) * dt:.3f} s): the force loop is unstable or the force exceeds the "
-                "motor's peak torque; lower motor.inertia_error (M_hat must stay below the true inertia), "
-                "motor.kp or motor.ki_per_s, or the force peak"
+            raise who.error(
+                trial,
+                when,
+                f"the motor current stayed at its ±{i_max:.2f} A limit for {_SATURATION_RUN_S:g} s without a "
+                "break (the force loop is unstable or the force exceeds the motor's peak torque)",
+            )
+        if n_saturated > max_saturated:
+            raise who.error(
+                trial,
+                when,
+                f"the motor current was at its ±{i_max:.2f} A limit for {n_saturated / fs_hz:.2f} s, more "
+                f"than the {SATURATION_DUTY_MAX:.0%} saturation duty allowed over the "
+                f"{total / fs_hz:g} s trial (the force loop oscillates against the current limit)",
             )
         data.ctrl[scene.motor_act] = current
 
@@ -241,8 +294,17 @@ def simulate_force_trial(
         if muscles.size:
             act_out[k] = data.act[act_idx]
         mujoco.mj_step(m, data, nstep=substeps)
-        if not np.isfinite(data.qpos[qm]):
-            raise SimulationError(f"the simulation diverged at t = {(k - n_settle) * dt:.3f} s")
+        # MuJoCo resets a diverged state (its clock restarts at 0) and warns
+        if not abs(data.time - (k + 1) * substeps * h) < 0.5 * h or not np.isfinite(data.qpos[qm]):
+            raise who.error(
+                trial,
+                when + dt,
+                "the state became non-finite or MuJoCo reset it (its acceleration diverged); "
+                f"MuJoCo warned {warning_counts([data])}",
+            )
+    warned = warning_counts([data])
+    if warned:
+        raise who.error(trial, (total - n_settle) * dt, f"MuJoCo warned {warned} during the trial")
 
     rec = out[:, n_settle:]
     return ForceTrial(

@@ -19,6 +19,7 @@ from armlab.errors import ConfigError
 from armlab.models import planar_arm
 from armlab.models.scene import Scene
 from armlab.sim.robot_ik import nominal_robot_posture, solve_ik
+from armlab.sim.stability import TrialLabels, check_rollout
 
 __all__ = [
     "HoldState",
@@ -87,13 +88,17 @@ def preload_activations(scene: Scene, arm: ArmConfig) -> np.ndarray:
     return act
 
 
-def settle(scene: Scene, arm: ArmConfig, duration_s: float) -> HoldState:
+def settle(scene: Scene, arm: ArmConfig, duration_s: float, *, protocol: str = "laboratory") -> HoldState:
     """Place arm and robot at q0 with the pre-load and let the scene settle.
 
     Args:
         scene: the composed scene.
         arm: arm configuration (q0, co-contraction, pre-load).
         duration_s: s, settling time.
+        protocol: named in a :class:`SimulationError`.
+
+    Raises:
+        SimulationError: the hold diverged while settling (MuJoCo warned or reset the state).
     """
     model = scene.model
     q0 = np.asarray(arm.q0, float)
@@ -115,6 +120,13 @@ def settle(scene: Scene, arm: ArmConfig, duration_s: float) -> HoldState:
     nstep = int(round(duration_s / model.opt.timestep))
 
     states, _ = rollout.rollout(model, data, state0[None], ctrl[None, None, :], nstep=nstep)
+    who = TrialLabels(
+        protocol=protocol,
+        labels=("the settling hold before the trials",),
+        hint="lower the cuff stiffness (cuff.stiffness_N_per_m) or sim.timestep_s",
+    )
+    dt = model.opt.timestep
+    check_rollout(who, state0[None], states, [data], dt, np.arange(1, nstep + 1) * dt)
     final = states[0, -1].copy()
     final[0] = 0.0  # trials start their clocks at zero
     q_arm = final[1 + scene.arm_qpos]

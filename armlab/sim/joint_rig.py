@@ -56,11 +56,13 @@ from scipy import interpolate, signal
 
 from armlab.config.effects import EffectsConfig, Reflex, enabled_effects
 from armlab.dsp import lowpass_noise, second_order_ba, second_order_lowpass
-from armlab.errors import ConfigError, DataError, SimulationError
+from armlab.errors import ConfigError, DataError
 from armlab.models.joint_rig_scene import Joint1DofScene, JointSubject, build_joint_rig_scene
 from armlab.sensors.channel import ChannelSpec, apply_channel
+from armlab.sim.stability import TrialLabels, check_bound, check_rollout
 
 __all__ = [
+    "JOINT_TORQUE_BOUND_NM",
     "MODEL_EFFECTS",
     "SENSOR_EFFECTS",
     "JointRecording",
@@ -85,6 +87,11 @@ SENSOR_EFFECTS = (
     "channel_delay",
     "encoder_quantisation",
 )
+# N m, largest clean torque of a valid trial: no human joint produces it (the strongest, knee
+# extension and ankle plantar flexion, reach ~250-400 N m at maximal effort) and a perturbation rig
+# of a relaxed or co-contracting joint measures far less; the referee's default subjects peak at
+# ~120 N m (8x margin).
+JOINT_TORQUE_BOUND_NM = 1000.0
 _OMEGA_DT_MAX = 0.2  # 1, ω_max·dt bound of the explicit integrator (phase error (ω·dt)²/24 < 0.2 %)
 _DAMP_DT_MAX = 0.5  # 1, (damping rate)·dt bound (explicit damping stable below 2)
 _CHUNK_OPEN_LOOP_S = 1.0  # s, rollout chunk without feedback effects (bounds memory only)
@@ -237,15 +244,6 @@ def _equilibrium(scene: Joint1DofScene, ctrl0: np.ndarray) -> np.ndarray:
     return out
 
 
-def _check_warnings(datas: list[mujoco.MjData], t_s: float) -> None:
-    for data in datas:
-        if data.warning.number.any():  # rollout clears the counters at each call
-            bad = {mujoco.mjtWarning(i).name: int(w.number) for i, w in enumerate(data.warning) if w.number}
-            raise SimulationError(
-                f"MuJoCo warned while simulating the 1-DoF joint rig before t = {t_s:.3f} s: {bad}"
-            )
-
-
 def simulate_joint_rig(
     reference: np.ndarray,
     fs_hz: float,
@@ -279,7 +277,8 @@ def simulate_joint_rig(
         ConfigError: an effect of another protocol (the message lists the ones that apply), a
             reflex delay under one sample, a filter cut-off not below Nyquist, a bad rate.
         DataError: a reference of the wrong shape or not finite.
-        SimulationError: MuJoCo warned or the state became non-finite.
+        SimulationError: MuJoCo warned, the state became non-finite (MuJoCo resets it), or the
+            torque passed :data:`JOINT_TORQUE_BOUND_NM`; naming the trial and the time.
     """
     ref = _check_inputs(reference, fs_hz, effects, noise_std_Nm)
     n_trials, n = ref.shape
@@ -292,7 +291,21 @@ def simulate_joint_rig(
     probe = build_joint_rig_scene(subject, effects)
     sub = _substeps(probe, fs_hz, float(np.max(act)) - 1.0)
     scene = build_joint_rig_scene(subject, effects, timestep_s=1.0 / (fs_hz * sub))
-    rec = _rollout_trials(scene, ref, act, sub, fs_hz, effects)
+    who = TrialLabels(
+        protocol="1-DoF joint rig",
+        labels=tuple(f"reference {i}" for i in range(n_trials)),
+        hint="the rig picks its own step from the subject's stiffness: check the subject's values",
+    )
+    rec = _rollout_trials(scene, ref, act, sub, fs_hz, effects, who)
+    check_bound(
+        who,
+        rec["torque"],
+        t_s,
+        JOINT_TORQUE_BOUND_NM,
+        "joint torque",
+        "N m",
+        "beyond any human joint's maximal torque",
+    )
     torque, position = _sensors(rec["torque"], rec["motor"], t_s, fs_hz, effects, noise_std_Nm, rng)
     return JointRecording(
         t_s=t_s,
@@ -323,7 +336,13 @@ def _servo_ctrl(scene: Joint1DofScene, ref: np.ndarray, fs_hz: float, sub: int) 
 
 
 def _rollout_trials(
-    scene: Joint1DofScene, ref: np.ndarray, act: np.ndarray, sub: int, fs_hz: float, effects: EffectsConfig
+    scene: Joint1DofScene,
+    ref: np.ndarray,
+    act: np.ndarray,
+    sub: int,
+    fs_hz: float,
+    effects: EffectsConfig,
+    who: TrialLabels,
 ) -> dict[str, np.ndarray]:
     """Clean signals at the sample instants, (n_trials, n) each, by name (see the recording)."""
     m = scene.model
@@ -372,9 +391,7 @@ def _rollout_trials(
                     -fric.stribeck_Nm * np.exp(-((v0 / vs) ** 2)) * np.sign(v0)
                 )[:, None]
             states, sd = runner.rollout(m, datas, state, ctrl, nstep=ns)
-            _check_warnings(datas, i1 / fs_hz)
-            if not np.all(np.isfinite(states[:, -1])):
-                raise SimulationError(f"the joint rig state became non-finite before t = {i1 / fs_hz:.3f} s")
+            check_rollout(who, state, states, datas, dt, (i0 * sub + np.arange(1, ns + 1)) * dt)
             at = sd[:, ::sub]  # sensordata of the forward pass at each sample instant
             limb_v[:, i0:i1] = scene.sensor(at, "limb_velocity")
             rec["motor"][:, i0:i1] = scene.sensor(at, "encoder")

@@ -27,9 +27,11 @@ from armlab.sensors.presets import SensorSuite, measure
 from armlab.sim.hold import HoldState, hand_world, settle
 from armlab.sim.robot_ik import solve_ik
 from armlab.sim.rollout import simulate
+from armlab.sim.stability import TrialLabels, check_bound
 from armlab.sim.subject import activation_commands
 
 __all__ = [
+    "CUFF_FORCE_BOUND_N",
     "LAB_EFFECTS",
     "LabRecording",
     "PATH_POINTS",
@@ -41,6 +43,16 @@ PATH_POINTS = 41  # IK points along each direction's hand path (spline-interpola
 #: Catalogue effects (``effects=[...]``) this laboratory applies; the reflex and the cuff
 #: compliance are part of the lab, switched by its own ``reflex.enabled`` and ``cuff.rigid``.
 LAB_EFFECTS = ("joint_friction", "force_sensor_bandwidth", "channel_delay", "force_sensor_noise")
+# N, largest cuff force (clean F/T reading) of a valid trial. No human-arm perturbation applies
+# it: the paper's perturbations move the hand a few cm against a 5 N pre-load, the LWR's joint
+# torque limits (176 N m at joints 1-2 over its ~0.5 m reach) cap its flange force near 350 N, and
+# 1 kN on a forearm cuff would injure. The default runs peak at about 48 N (20x margin); a cuff
+# spring the step cannot integrate reaches kN at once (1e7 N/m undamped: 25 kN).
+CUFF_FORCE_BOUND_N = 1000.0
+_UNSTABLE_HINT = (
+    "lower cuff.stiffness_N_per_m or sim.timestep_s, or raise cuff.damping_Ns_per_m "
+    "(docs/reliability.md, Instability)"
+)
 
 
 def _apply_model_effects(scene: Scene, effects: EffectsConfig) -> None:
@@ -145,7 +157,7 @@ def record_trials(
         )
     scene = build_scene(cfg.arm, cfg.cuff, cfg.robot, cfg.sim)
     _apply_model_effects(scene, cfg.effects)
-    hold = settle(scene, cfg.arm, cfg.sim.settle_s)
+    hold = settle(scene, cfg.arm, cfg.sim.settle_s, protocol=cfg.protocol_name)
     truth = ground_truth(scene, hold.state, cfg.cuff.rigid)
 
     fs = cfg.sensors.fs_hz
@@ -169,9 +181,27 @@ def record_trials(
         muscle_base = activation_commands(
             hold.activation, subject, plan.n_trials, n_steps, substeps, fs, subject_rng
         )
-    sim = simulate(scene, hold.state, targets, muscle_base, cfg.reflex, substeps=substeps)
+    who = TrialLabels(
+        protocol=cfg.protocol_name,
+        labels=tuple(
+            f"T_k {1e3 * plan.t_k_s[i]:.0f} ms, direction {plan.direction[i]}, onset at "
+            f"{(onset + 1) / fs:.3f} s"
+            for i in range(plan.n_trials)
+        ),
+        hint=_UNSTABLE_HINT,
+    )
+    sim = simulate(scene, hold.state, targets, muscle_base, cfg.reflex, substeps=substeps, who=who)
 
     sd = sim.sensordata
+    check_bound(
+        who,
+        scene.sensor(sd, "ft_force"),
+        (np.arange(n_samples) + 1) / fs,
+        CUFF_FORCE_BOUND_N,
+        "cuff force",
+        "N",
+        "no arm perturbation applies it; valid runs stay below 50 N",
+    )
     clean = {
         "robot_q": np.concatenate([scene.sensor(sd, f"lwr_q{i}") for i in range(1, 8)], axis=-1),
         "robot_tau": np.concatenate([scene.sensor(sd, f"lwr_tau{i}") for i in range(1, 8)], axis=-1),

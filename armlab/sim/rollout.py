@@ -19,6 +19,7 @@ from mujoco import rollout as mj_rollout
 from armlab.config.schema import ReflexConfig
 from armlab.errors import SimulationError
 from armlab.models.scene import MUSCLES, Scene
+from armlab.sim.stability import TrialLabels, check_rollout
 
 __all__ = [
     "REFLEX_LENGTH_SCALE_M",
@@ -86,6 +87,7 @@ def simulate(
     *,
     substeps: int,
     nthread: int | None = None,
+    who: TrialLabels | None = None,
 ) -> SimResult:
     """Simulate a batch of trials from one settled state.
 
@@ -99,9 +101,13 @@ def simulate(
         reflex: reflex pathways (``enabled=False`` for none).
         substeps: physics steps per recorded sample.
         nthread: rollout threads (default: all cores).
+        who: the trials, named in a :class:`SimulationError` (default: "row <i> of the batch").
 
     Returns:
         The clean signals, sampled every ``substeps`` steps.
+
+    Raises:
+        SimulationError: a trial diverged (MuJoCo warned or reset its state; :mod:`.stability`).
     """
     model = scene.model
     n_trials, n_steps, _ = robot_targets.shape
@@ -113,6 +119,9 @@ def simulate(
             f"got {muscle_base.shape}"
         )
     dt = model.opt.timestep
+    if who is None:
+        rows = tuple(f"row {i} of the batch" for i in range(n_trials))
+        who = TrialLabels(protocol="simulation", labels=rows, hint="")
     if reflex.enabled:
         lag_s = int(round(reflex.stretch_latency_s / dt))
         lag_sp = int(round(reflex.spinal_latency_s / dt))
@@ -173,6 +182,7 @@ def simulate(
                 u = np.broadcast_to(base, (n_trials, m, len(MUSCLES)))
             ctrl[:, :, scene.muscle_act] = u
             states, sd = runner.rollout(model, data, state, ctrl, nstep=m)
+            check_rollout(who, state, states, data, dt, np.arange(c0 + 1, c1 + 1) * dt)
             state = states[:, -1]
             hist_len[:, c0:c1] = sd[:, :, len_sl]
             hist_vel[:, c0:c1] = sd[:, :, vel_sl]

@@ -43,7 +43,8 @@ from armlab.perturbations.multisine import ForceScenario, load_force_scenario, m
 from armlab.protocols.fractional_elbow.config import FractionalElbowConfig
 from armlab.sensors.channel import ChannelSpec
 from armlab.sensors.presets import DD_ENCODER, JR3_FORCE
-from armlab.sim.force_control import simulate_force_trial
+from armlab.sim.force_control import FORCE_LOOP_HINT, simulate_force_trial
+from armlab.sim.stability import TrialLabels
 from armlab.sim.subject import activation_commands
 
 __all__ = [
@@ -115,8 +116,15 @@ def simulate_fractional(cfg: FractionalElbowConfig) -> FractionalRecording:
     rngs = np.random.default_rng(cfg.seed).spawn(scenario.n_trials)
     fluctuating = cfg.subject.active and scene.muscle_act.size > 0
     n_settle = int(round(scenario.settle_s * scenario.fs_hz))
+    who = TrialLabels(
+        protocol=cfg.protocol_name,
+        labels=tuple(
+            f"random-phase multisine {i + 1} of {len(rngs)}, seed {cfg.seed}" for i in range(len(rngs))
+        ),
+        hint=FORCE_LOOP_HINT,
+    )
     trials = []
-    for rng in rngs:
+    for i, rng in enumerate(rngs):
         # the third child feeds the subject's fluctuation; the first two are those of a 2-way
         # spawn, so a steady subject draws exactly the force and sensor noise it always did
         plan_rng, noise_rng, subject_rng = rng.spawn(3)
@@ -147,6 +155,8 @@ def simulate_fractional(cfg: FractionalElbowConfig) -> FractionalRecording:
                 noise_rng,
                 accel_noise_rad_s2=accel_noise,
                 muscle_base=base,
+                who=who,
+                trial=i,
             )
         )
     names = {

@@ -28,7 +28,8 @@ from armlab.models.spring_array import TABLE_I_PAYLOADS_KG, TABLE_I_STIFFNESS, t
 from armlab.perturbations.sum_of_sines import sum_of_sines
 from armlab.protocols.virtual_force_sensor.config import VirtualForceSensorConfig
 from armlab.sensors.presets import CapstanSensorSuite, measure
-from armlab.sim.capstan_lab import CLEAN_UNITS, simulate_capstan
+from armlab.sim.capstan_lab import CAPSTAN_HINT, CLEAN_UNITS, simulate_capstan
+from armlab.sim.stability import TrialLabels
 from armlab.sim.subject import activation_commands
 
 __all__ = [
@@ -78,6 +79,7 @@ def _stage(
     arm_q: np.ndarray | None = None,
     activation: np.ndarray | None = None,
     subject_rng: np.random.Generator | None = None,
+    stage: str = "",
 ) -> dict[str, np.ndarray]:
     v, c = cfg.vfs, cfg.capstan
     refs = [
@@ -106,6 +108,11 @@ def _stage(
         duration_s=v.trial_s,
         settle_s=v.settle_s,
         muscle_ctrl=muscle_ctrl,
+        who=TrialLabels(
+            protocol=cfg.protocol_name,
+            labels=tuple(f"{stage}, repetition {k + 1} of {n_trials}" for k in range(n_trials)),
+            hint=CAPSTAN_HINT,
+        ),
     )
     measured = measure({k: clean[k] for k in MEASURED}, _suite(cfg), cfg.sensors.fs_hz, rng)
     return {**measured, **{k: clean[k] for k in _SAVED_TRUTH}}
@@ -146,7 +153,14 @@ def simulate_vfs(cfg: VirtualForceSensorConfig) -> VfsRecording:
         add(
             "robot_id",
             _stage(
-                cfg, scene, np.array(HOME_THETA_RAD), v.robot_id_trials, v.id_range_deg, rng, v.id_band_hz
+                cfg,
+                scene,
+                np.array(HOME_THETA_RAD),
+                v.robot_id_trials,
+                v.id_range_deg,
+                rng,
+                v.id_band_hz,
+                stage="robot identification",
             ),
         )
     if v.trials_per_config:
@@ -166,7 +180,16 @@ def simulate_vfs(cfg: VirtualForceSensorConfig) -> VfsRecording:
                 theta0 = scene.dynamics.ik(np.array([field.x0, field.y0]))
                 add(
                     "fixture",
-                    _stage(cfg, scene, theta0, v.trials_per_config, v.range_deg, rng, v.band_hz),
+                    _stage(
+                        cfg,
+                        scene,
+                        theta0,
+                        v.trials_per_config,
+                        v.range_deg,
+                        rng,
+                        v.band_hz,
+                        stage=f"fixture {k_label} with payload {m_label}",
+                    ),
                     k_label,
                     m_label,
                 )
@@ -179,7 +202,19 @@ def simulate_vfs(cfg: VirtualForceSensorConfig) -> VfsRecording:
         truth["arm"] = endpoint_truth(scene, scene.initial_state(theta0, arm_q, act)).as_dict()
         add(
             "arm",
-            _stage(cfg, scene, theta0, v.arm_trials, v.range_deg, rng, v.band_hz, arm_q, act, subject_rng),
+            _stage(
+                cfg,
+                scene,
+                theta0,
+                v.arm_trials,
+                v.range_deg,
+                rng,
+                v.band_hz,
+                arm_q,
+                act,
+                subject_rng,
+                stage="relaxed arm",
+            ),
         )
     channels = {k: np.concatenate([b[k] for b in batches]) for k in batches[0]}
     n_total = len(channels["theta"])
