@@ -53,7 +53,8 @@ def test_full_inertia_compensation_destabilises_the_loop(scene):
     # M_hat = M with a one-period-late accelerometer is a marginal positive feedback: the current
     # chatters between its limits (measured before issue 22: tracking error ~6 against 0.14 with
     # M_hat = 0.8 M, a result that used to be returned); the saturation duty now refuses the trial
-    with pytest.raises(SimulationError, match=r"trial 0 .*unstable at t = [\d.]+ s.*12\.34 A limit.*5% saturation duty"):
+    duty = r"trial 0 .*unstable at t = [\d.]+ s.*12\.34 A limit.*5% saturation duty"
+    with pytest.raises(SimulationError, match=duty):
         _run(scene, _reference(8.0), DirectDriveConfig(inertia_error=0.0, kp=0.0, ki_per_s=0.0))
 
 
