@@ -17,6 +17,7 @@ import numpy as np
 from armlab.config import choices
 from armlab.config.capstan import CapstanConfig, VfsConfig
 from armlab.config.effects import EffectsConfig
+from armlab.config.integration import TIMESTEP_MAX_S, TIMESTEP_MIN_S
 from armlab.config.validate import check, choice
 from armlab.errors import ConfigError
 
@@ -164,7 +165,11 @@ class SimConfig:
 
     def __post_init__(self) -> None:
         choice("sim.integrator", self.integrator, choices.Integrator)
-        check(0 < self.timestep_s <= 0.001, f"sim.timestep_s must lie in (0, 0.001] s, got {self.timestep_s}")
+        check(
+            TIMESTEP_MIN_S <= self.timestep_s <= TIMESTEP_MAX_S,
+            f"sim.timestep_s must lie in [{TIMESTEP_MIN_S:g}, {TIMESTEP_MAX_S:g}] s (below, a run takes "
+            f"hours; above, the step undersamples the recording), got {self.timestep_s}",
+        )
         check(self.settle_s >= 0.2, f"sim.settle_s must be >= 0.2 s, got {self.settle_s}")
 
 

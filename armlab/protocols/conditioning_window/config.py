@@ -12,6 +12,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from armlab.config.integration import check_spring, check_steps_per_sample
 from armlab.config.schema import (
     ArmConfig,
     CuffConfig,
@@ -77,3 +78,23 @@ class ConditioningWindowConfig(ExperimentConfig):
         )
     )
     subject: SubjectConfig = field(default_factory=lambda: SubjectConfig(**SUBJECT))
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        check_steps_per_sample(self.sim.timestep_s, self.sensors.fs_hz)
+        if not self.cuff.rigid:
+            # the cuff springs push the mount (0.02 kg, models/common/cuff.xml) that the connect
+            # constraint ties to the shell (cuff.mass_kg) on the hand: the shell alone is a lower
+            # bound of the mass they move (the arm adds to it). Necessary only: with the soft
+            # constraint the lab diverges below it (measured, undamped at 0.5 ms: 5e6 N/m stable,
+            # 8e6 N/m not; the trial's cuff-force bound catches that, armlab.sim.lab).
+            check_spring(
+                "cuff.stiffness_N_per_m",
+                self.cuff.stiffness_N_per_m,
+                self.cuff.mass_kg,
+                "the cuff shell (cuff.mass_kg)",
+                self.sim.timestep_s,
+                self.sim.integrator,
+                damping=self.cuff.damping_Ns_per_m,
+                damping_name="cuff.damping_Ns_per_m",
+            )

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from armlab.config.integration import check_steps_per_sample
 from armlab.config.schema import (
     DirectDriveConfig,
     ElbowConfig,
@@ -39,3 +40,7 @@ class FractionalElbowConfig(ExperimentConfig):
     reflex: ReflexConfig = field(default_factory=ReflexConfig)  # of the Hill elbow (impedance=muscle)
     scenario: ScenarioConfig = field(default_factory=lambda: ScenarioConfig(name="fractional_elbow"))
     subject: SubjectConfig = field(default_factory=lambda: SubjectConfig(**SUBJECT))  # of the muscles
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        check_steps_per_sample(self.sim.timestep_s, self.sensors.fs_hz, "control")

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from armlab.config.integration import check_steps_per_sample
 from armlab.config.schema import ArmConfig, CapstanConfig, ExperimentConfig, VfsConfig
 from armlab.config.subject import PAPER000_SUBJECT, SubjectConfig
 
@@ -27,3 +28,7 @@ class VirtualForceSensorConfig(ExperimentConfig):
     capstan: CapstanConfig = field(default_factory=CapstanConfig)
     vfs: VfsConfig = field(default_factory=VfsConfig)
     subject: SubjectConfig = field(default_factory=lambda: SubjectConfig(**SUBJECT))
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        check_steps_per_sample(self.sim.timestep_s, self.sensors.fs_hz)
