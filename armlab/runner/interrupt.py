@@ -1,0 +1,66 @@
+"""Stopping a run cleanly: SIGTERM handled like Ctrl-C, and sweep workers that stop with their parent.
+
+Python's default SIGTERM ends the process at once: no ``finally`` runs, so temporaries stay and
+nothing says what was left unfinished. :func:`handle_termination` turns SIGTERM (and SIGINT) into
+:class:`Interrupted` in the main thread, so every writer removes its temporary file
+(:mod:`armlab.data.atomic`) and the CLI names the unfinished folder.
+
+A joblib (loky) worker is a separate process: when its parent is killed it keeps running its job to
+the end unless told otherwise (loky notices a dead parent only when it asks for the next job).
+:func:`stop_with_parent` starts a watcher thread in the worker that sends the worker SIGTERM once
+its parent has gone. When the parent itself is interrupted, joblib aborts the sweep and kills its
+workers (SIGKILL: they cannot clean up; resuming removes what they left, see
+:func:`armlab.data.rundir.clean_partial`).
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import threading
+import time
+
+__all__ = ["Interrupted", "handle_termination", "stop_with_parent"]
+
+#: how often a worker checks that its parent is alive, s (a job outlives its parent by at most this)
+_PARENT_POLL_S = 0.5
+_WATCHER_NAME = "armlab-parent-watcher"
+
+
+class Interrupted(KeyboardInterrupt):
+    """A run stopped by a signal (SIGTERM or SIGINT); ``signum`` names which."""
+
+    def __init__(self, signum: int):
+        super().__init__(signal.Signals(signum).name)
+        self.signum = signum
+
+
+def _raise(signum, frame) -> None:
+    raise Interrupted(signum)
+
+
+def handle_termination() -> None:
+    """Raise :class:`Interrupted` in the main thread on SIGTERM and SIGINT (elsewhere: nothing)."""
+    if threading.current_thread() is not threading.main_thread():
+        return  # only the main thread may set signal handlers
+    for sig in (signal.SIGTERM, signal.SIGINT):
+        signal.signal(sig, _raise)
+
+
+def _watch(parent_pid: int) -> None:
+    while os.getppid() == parent_pid:
+        time.sleep(_PARENT_POLL_S)
+    os.kill(os.getpid(), signal.SIGTERM)  # the parent is gone: stop this job like a SIGTERM would
+
+
+def stop_with_parent(parent_pid: int) -> None:
+    """In a worker process of ``parent_pid``: stop (SIGTERM to itself) as soon as the parent dies.
+
+    Does nothing in the parent itself or in a process that is not its child; starts one watcher per
+    process (workers are reused across jobs).
+    """
+    if os.getpid() == parent_pid or os.getppid() != parent_pid:
+        return
+    if any(t.name == _WATCHER_NAME for t in threading.enumerate()):
+        return
+    threading.Thread(target=_watch, args=(parent_pid,), name=_WATCHER_NAME, daemon=True).start()
