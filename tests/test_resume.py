@@ -249,6 +249,7 @@ def test_interrupted_sweep_resumes_to_the_uninterrupted_results(tmp_path):
 
 
 def test_joblib_sweep_interrupted_resumes_bit_identical_to_a_serial_one(tmp_path):
+    """Same seed, serial or joblib, interrupted or not: bit-identical trials (~20 s)."""
     sweep = ["--multirun", "seed=0,1,2", *SMALL]
     serial = tmp_path / "serial"
     assert _armlab("run", *sweep, f"hydra.sweep.dir={serial}").returncode == 0
@@ -259,7 +260,8 @@ def test_joblib_sweep_interrupted_resumes_bit_identical_to_a_serial_one(tmp_path
     proc.communicate(timeout=60)
     assert proc.returncode == 128 + signal.SIGTERM
     assert run_state(run / "1") == "incomplete"
-    resumed = _armlab("run", "resume=true", *sweep, "hydra/launcher=joblib", f"hydra.sweep.dir={run}")
+    # no sweep given: the one stored in multirun.yaml is reused
+    resumed = _armlab("run", "--multirun", "resume=true", "hydra/launcher=joblib", f"hydra.sweep.dir={run}")
     assert resumed.returncode == 0, resumed.stderr
     for job in ("0", "1", "2"):
         _same_run(serial / job, run / job)
@@ -370,3 +372,13 @@ def test_stop_with_parent_does_nothing_in_the_parent_itself():
 
     stop_with_parent(os.getpid())
     assert not any(t.name == "armlab-parent-watcher" for t in threading.enumerate())
+
+
+def test_the_python_api_refuses_an_unfinished_folder_before_simulating(incomplete, registered, monkeypatch):
+    from armlab.cli import compose
+    from armlab.runner import run
+
+    _, cfg = compose(TOY)
+    monkeypatch.setattr(run, "_run", lambda *a: pytest.fail("simulated before refusing"))
+    with pytest.raises(DataError, match=r"holds outputs of an unfinished run \(.*trials\.h5.*resume=true"):
+        run.run_protocol(cfg, incomplete)
