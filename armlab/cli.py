@@ -143,10 +143,14 @@ def _run(args: list[str]) -> int:
     check_effects(protocol, exp)
 
     parent = os.getpid()
+    started: list[str] = []  # the job folders this process entered (not those of joblib workers)
 
     def task(cfg) -> None:
+        from hydra.core.hydra_config import HydraConfig
+
         interrupt.stop_with_parent(parent)  # in a joblib worker: stop when the parent is gone
         interrupt.handle_termination()
+        started.append(HydraConfig.get().runtime.output_dir)
         try:
             _hydra_task(cfg, resume)
         except ArmlabError as exc:
@@ -162,10 +166,17 @@ def _run(args: list[str]) -> int:
     try:
         wrapped()
     except interrupt.Interrupted as exc:
+        if multirun:
+            where = (
+                _sweep_dir(overrides) if any(o.startswith("hydra.sweep.dir=") for o in overrides) else None
+            )
+            fix = (
+                f"armlab run --multirun resume=true hydra.sweep.dir={where or '<sweep folder>'} <same sweep>"
+            )
+        else:
+            fix = f"armlab run resume=true hydra.run.dir={started[-1] if started else '<run folder>'}"
         print(
-            f"armlab: interrupted ({exc}); a run folder without results.json is incomplete: finish it "
-            "with `armlab run resume=true hydra.run.dir=<folder>` (a sweep: `armlab run --multirun "
-            "resume=true hydra.sweep.dir=<folder> <same sweep>`)",
+            f"armlab: interrupted ({exc}); the unfinished run is incomplete: finish it with `{fix}`",
             file=sys.stderr,
         )
         return 128 + exc.signum

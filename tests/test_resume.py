@@ -212,7 +212,8 @@ def test_sigterm_mid_run_leaves_no_temporary_and_resume_finishes_it(toy_run, tmp
     proc.send_signal(signal.SIGTERM)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 128 + signal.SIGTERM, err
-    assert "interrupted (SIGTERM)" in err and "resume=true" in err and "Traceback" not in err
+    assert "interrupted (SIGTERM)" in err and "Traceback" not in err and err.count("\n") == 1
+    assert f"`armlab run resume=true hydra.run.dir={run_dir}`" in err
     assert run_state(run_dir) == "incomplete" and not _temporaries(run_dir)
     done = _toy_cli("run", "resume=true", f"hydra.run.dir={run_dir}")
     assert done.returncode == 0, done.stderr
@@ -229,8 +230,9 @@ def test_interrupted_sweep_resumes_to_the_uninterrupted_results(tmp_path):
     proc = _toy_cli("run", *sweep, f"hydra.sweep.dir={run}", wait=False)
     _wait_for(run / "1" / ".hydra" / "overrides.yaml", proc)  # job 0 done, job 1 simulating
     proc.send_signal(signal.SIGTERM)
-    proc.communicate(timeout=60)
+    _, err = proc.communicate(timeout=60)
     assert proc.returncode == 128 + signal.SIGTERM
+    assert f"`armlab run --multirun resume=true hydra.sweep.dir={run} <same sweep>`" in err
     assert run_state(run / "0") == "complete" and run_state(run / "1") == "incomplete"
     assert not (run / "2").exists() and not _temporaries(run)
     finished = _snapshot(run / "0")
