@@ -8,7 +8,7 @@ nothing says what was left unfinished. :func:`handle_termination` turns SIGTERM 
 A joblib (loky) worker is a separate process: when its parent is killed it keeps running its job to
 the end unless told otherwise (loky notices a dead parent only when it asks for the next job).
 :func:`stop_with_parent` starts a watcher thread in the worker that sends the worker SIGTERM once
-its parent has gone. When the parent itself is interrupted, joblib aborts the sweep and kills its
+its parent has gone (its job stops and cleans up) and then ends the process. When the parent itself is interrupted, joblib aborts the sweep and kills its
 workers (SIGKILL: they cannot clean up; resuming removes what they left, see
 :func:`armlab.data.rundir.clean_partial`).
 """
@@ -24,6 +24,9 @@ __all__ = ["Interrupted", "handle_termination", "stop_with_parent"]
 
 #: how often a worker checks that its parent is alive, s (a job outlives its parent by at most this)
 _PARENT_POLL_S = 0.5
+#: time an orphaned worker's job gets to run its ``finally`` blocks (remove its temporaries, close
+#: files: milliseconds in practice) before the process exits, s
+_CLEANUP_GRACE_S = 2.0
 _WATCHER_NAME = "armlab-parent-watcher"
 
 
@@ -51,10 +54,13 @@ def _watch(parent_pid: int) -> None:
     while os.getppid() == parent_pid:
         time.sleep(_PARENT_POLL_S)
     os.kill(os.getpid(), signal.SIGTERM)  # the parent is gone: stop this job like a SIGTERM would
+    time.sleep(_CLEANUP_GRACE_S)
+    os._exit(128 + signal.SIGTERM)  # and the worker itself (loky would keep it idle for minutes)
 
 
 def stop_with_parent(parent_pid: int) -> None:
-    """In a worker process of ``parent_pid``: stop (SIGTERM to itself) as soon as the parent dies.
+    """In a worker process of ``parent_pid``: stop as soon as the parent dies (SIGTERM to itself,
+    then exit once its job has cleaned up).
 
     Does nothing in the parent itself or in a process that is not its child; starts one watcher per
     process (workers are reused across jobs).
