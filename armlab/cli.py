@@ -149,10 +149,10 @@ def _run(args: list[str]) -> int:
         from hydra.core.hydra_config import HydraConfig
 
         interrupt.stop_with_parent(parent)  # in a joblib worker: stop when the parent is gone
-        interrupt.handle_termination()
         started.append(HydraConfig.get().runtime.output_dir)
         try:
-            _hydra_task(cfg, resume)
+            with interrupt.handle_termination():  # a joblib worker's main thread runs the task
+                _hydra_task(cfg, resume)
         except ArmlabError as exc:
             print(f"armlab: error: {exc}", file=sys.stderr)
             raise SystemExit(2) from None
@@ -162,9 +162,9 @@ def _run(args: list[str]) -> int:
     sys.argv = ["armlab"] + (["--multirun"] if multirun else []) + overrides
     sweep_yaml = _sweep_dir(overrides) / "multirun.yaml" if multirun and resume else None
     kept = keep_file(sweep_yaml) if sweep_yaml else None
-    interrupt.handle_termination()
     try:
-        wrapped()
+        with interrupt.handle_termination():
+            wrapped()
     except interrupt.Interrupted as exc:
         if multirun:
             where = (

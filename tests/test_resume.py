@@ -322,12 +322,12 @@ def test_estimate_folder_records_its_overrides(toy_run, tmp_path, registered, ca
 _WORKER = """
 import os, sys, time
 from armlab.runner.interrupt import handle_termination, stop_with_parent
-handle_termination()
 stop_with_parent(int(sys.argv[1]))
 print("ready", flush=True)
 try:
-    while True:
-        time.sleep(0.05)
+    with handle_termination():
+        while True:
+            time.sleep(0.05)
 except KeyboardInterrupt as exc:
     open(sys.argv[2], "w").write(type(exc).__name__)
 """
@@ -367,6 +367,16 @@ def test_a_worker_stops_when_its_parent_is_killed(tmp_path):
     if _alive(child_pid):
         os.kill(child_pid, signal.SIGKILL)
         pytest.fail("the worker outlived its parent")
+
+
+def test_signal_handlers_are_restored_after_the_block():
+    from armlab.runner.interrupt import handle_termination
+
+    before = signal.getsignal(signal.SIGTERM)
+    with pytest.raises(Interrupted, match="SIGTERM"), handle_termination():
+        os.kill(os.getpid(), signal.SIGTERM)
+        time.sleep(5)  # the handler raises at once; never reached
+    assert signal.getsignal(signal.SIGTERM) is before
 
 
 def test_stop_with_parent_does_nothing_in_the_parent_itself():

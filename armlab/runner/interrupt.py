@@ -1,16 +1,16 @@
 """Stopping a run cleanly: SIGTERM handled like Ctrl-C, and sweep workers that stop with their parent.
 
 Python's default SIGTERM ends the process at once: no ``finally`` runs, so temporaries stay and
-nothing says what was left unfinished. :func:`handle_termination` turns SIGTERM (and SIGINT) into
+nothing says what was left unfinished. Within :func:`handle_termination` SIGTERM (and SIGINT) raise
 :class:`Interrupted` in the main thread, so every writer removes its temporary file
 (:mod:`armlab.data.atomic`) and the CLI names the unfinished folder.
 
 A joblib (loky) worker is a separate process: when its parent is killed it keeps running its job to
 the end unless told otherwise (loky notices a dead parent only when it asks for the next job).
 :func:`stop_with_parent` starts a watcher thread in the worker that sends the worker SIGTERM once
-its parent has gone (its job stops and cleans up) and then ends the process. When the parent itself is interrupted, joblib aborts the sweep and kills its
-workers (SIGKILL: they cannot clean up; resuming removes what they left, see
-:func:`armlab.data.rundir.clean_partial`).
+its parent has gone (its job stops and cleans up) and then ends the process. When the parent
+itself is interrupted, joblib aborts the sweep and kills its workers (SIGKILL: they cannot clean
+up; resuming removes what they left, see :func:`armlab.data.rundir.clean_partial`).
 """
 
 from __future__ import annotations
@@ -19,6 +19,8 @@ import os
 import signal
 import threading
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 
 __all__ = ["Interrupted", "handle_termination", "stop_with_parent"]
 
@@ -28,6 +30,7 @@ _PARENT_POLL_S = 0.5
 #: files: milliseconds in practice) before the process exits, s
 _CLEANUP_GRACE_S = 2.0
 _WATCHER_NAME = "armlab-parent-watcher"
+_SIGNALS = (signal.SIGTERM, signal.SIGINT)
 
 
 class Interrupted(KeyboardInterrupt):
@@ -42,12 +45,24 @@ def _raise(signum, frame) -> None:
     raise Interrupted(signum)
 
 
-def handle_termination() -> None:
-    """Raise :class:`Interrupted` in the main thread on SIGTERM and SIGINT (elsewhere: nothing)."""
+@contextmanager
+def handle_termination() -> Iterator[None]:
+    """Within the block, SIGTERM and SIGINT raise :class:`Interrupted` in the main thread.
+
+    The previous handlers are restored after it; outside the main thread (where no handler can be
+    set) it does nothing.
+    """
     if threading.current_thread() is not threading.main_thread():
-        return  # only the main thread may set signal handlers
-    for sig in (signal.SIGTERM, signal.SIGINT):
+        yield
+        return
+    before = {sig: signal.getsignal(sig) for sig in _SIGNALS}
+    for sig in _SIGNALS:
         signal.signal(sig, _raise)
+    try:
+        yield
+    finally:
+        for sig, handler in before.items():
+            signal.signal(sig, handler)
 
 
 def _watch(parent_pid: int) -> None:
