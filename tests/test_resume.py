@@ -394,3 +394,12 @@ def test_the_python_api_refuses_an_unfinished_folder_before_simulating(incomplet
     monkeypatch.setattr(run, "_run", lambda *a: pytest.fail("simulated before refusing"))
     with pytest.raises(DataError, match=r"holds outputs of an unfinished run \(.*trials\.h5.*resume=true"):
         run.run_protocol(cfg, incomplete)
+
+
+def test_measured_trial_files_are_not_run_folders(tmp_path):
+    (tmp_path / "trials.h5").write_bytes(b"")  # real data converted to the trial format: no run
+    require_complete(tmp_path)
+    require_complete(tmp_path / "trials.h5")
+    (tmp_path / "scene.xml").write_text("<mujoco/>")  # armlab run wrote this one
+    with pytest.raises(DataError, match="incomplete run"):
+        require_complete(tmp_path / "trials.h5")

@@ -1,10 +1,10 @@
 """The one completeness rule of a run folder, and what resuming an unfinished one removes.
 
 A run folder (made by ``armlab run``) is **complete** when it holds ``results.json``: the runner
-writes it last, atomically (:mod:`armlab.data.atomic`), after every other output. A folder that
-holds a run's metadata or outputs (``.hydra/config.yaml``, ``trials.h5``, ``scene.xml``, ...) but no
-``results.json`` is **incomplete**: its run was interrupted or failed. Every verb that reads a run
-folder asks :func:`require_complete`, which names the command that finishes it.
+writes it last, atomically (:mod:`armlab.data.atomic`), after every other output. A run folder
+(one holding ``.hydra/config.yaml`` or ``scene.xml``) without ``results.json`` is **incomplete**:
+its run was interrupted or failed. Every verb that reads a run folder asks
+:func:`require_complete`, which names the command that finishes it.
 """
 
 from __future__ import annotations
@@ -57,9 +57,9 @@ def resume_command(folder: str | Path) -> str:
 
 
 def _is_run_folder(folder: Path) -> bool:
-    return (folder / METADATA_DIR / "config.yaml").is_file() or any(
-        (folder / name).is_file() for name in ("trials.h5", "scene.xml")
-    )
+    """Made by ``armlab run`` (its config record or composed scene): a trial file alone may be
+    measured data converted to the trial format, which needs no results.json."""
+    return (folder / METADATA_DIR / "config.yaml").is_file() or (folder / "scene.xml").is_file()
 
 
 def require_complete(path: str | Path) -> None:
