@@ -2,6 +2,8 @@
 
     armlab run [protocol=<name>] [Hydra overrides ...]   simulate + estimate, outputs in the run dir
     armlab run --multirun seed=0,1,2 ...                 sweep through Hydra's launcher
+    armlab run resume=true hydra.run.dir=<run_dir>       finish an interrupted run (its overrides)
+    armlab run --multirun resume=true hydra.sweep.dir=<d> [sweep]  run a sweep's missing jobs only
     armlab estimate <run_dir> [<group>.<field>=<v>]      re-run estimation on saved trials.h5
                                                          (estimator | frf | vfs, by protocol)
     armlab view <run_dir>                                open the run's rerun recording
@@ -36,6 +38,10 @@ def _usage() -> str:
         "",
         "verbs:",
         "  run [--multirun] [protocol=<name>] [overrides]  simulate a protocol and estimate impedance",
+        "  run resume=true hydra.run.dir=<run_dir>         finish an interrupted run (same overrides, same",
+        "                                                  results); a complete one is left untouched",
+        "  run --multirun resume=true hydra.sweep.dir=<dir> [sweep]",
+        "                                                  run only a sweep's missing/incomplete jobs",
         "  estimate <run_dir> [<group>.<field>=<value>]    re-run estimation on a run's trials.h5",
         "  view <run_dir>                                  open the run's rerun recording (trials.rrd)",
         "  diagnose data=<file|folder> protocol=<name> [diagnosis.<field>=<value>] [out=<dir>]",
@@ -77,32 +83,58 @@ def compose(overrides: list[str]):
     return compose_protocol(overrides)
 
 
-def _hydra_task(cfg) -> None:
+def _hydra_task(cfg, resume: bool) -> None:
     from hydra.core.hydra_config import HydraConfig
     from omegaconf import OmegaConf
 
     from armlab.config.store import to_experiment
+    from armlab.runner.resume import prepare_run_dir
     from armlab.runner.run import format_table, run_protocol
 
     exp = to_experiment(cfg)
-    out_dir = Path(HydraConfig.get().runtime.output_dir)
-    results = run_protocol(exp, out_dir, OmegaConf.to_yaml(cfg))
+    hydra_cfg = HydraConfig.instance().cfg
+    out_dir = Path(hydra_cfg.hydra.runtime.output_dir)
+    config_yaml = OmegaConf.to_yaml(cfg)
+    meta = {
+        "hydra_yaml": OmegaConf.to_yaml(hydra_cfg),
+        "overrides_yaml": OmegaConf.to_yaml(hydra_cfg.hydra.overrides.task),
+    }
+    if not prepare_run_dir(out_dir, resume=resume, config_yaml=config_yaml, **meta):
+        print(f"{out_dir} is complete (results.json); left untouched")
+        return
+    results = run_protocol(exp, out_dir, config_yaml)
     if exp.output.print_table:
         print(format_table(results))
     print(f"outputs: {out_dir}")
 
 
 def _run(args: list[str]) -> int:
+    import os
+
     import hydra
 
     from armlab.config.store import CONFIG_DIR
     from armlab.protocols.compose import check_effects, split_protocol
+    from armlab.runner import interrupt
+    from armlab.runner.resume import keep_file, plan_launch, restore_file
 
     multirun = "--multirun" in args or "-m" in args
     overrides = [a for a in args if a not in ("--multirun", "-m")]
     bad = [a for a in overrides if a.startswith("-")]
     if bad:
         return _fail(f"unknown option(s) {bad}; valid: --multirun (or -m) and key=value overrides")
+    # resume=<true|false> is armlab's, not Hydra's: finish an interrupted run or sweep folder
+    flags = [a.partition("=")[2] for a in overrides if a.partition("=")[0] == "resume"]
+    if any(v not in ("true", "false") for v in flags) or len(flags) > 1:
+        return _fail(
+            f"resume={flags[-1] if len(flags) == 1 else flags}: give it once, as resume=true or resume=false"
+        )
+    resume = flags == ["true"]
+    overrides = [a for a in overrides if a.partition("=")[0] != "resume"]
+    overrides, note = plan_launch(overrides, multirun=multirun, resume=resume)
+    if note is not None:
+        print(note)
+        return 0
     # validate everything up front (one-line errors, nothing written); of a sweep (a,b,c) its first
     # value (lists [a,b] are values, not sweeps)
     first = [o if o.partition("=")[2].startswith(("[", "{")) else o.split(",")[0] for o in overrides]
@@ -110,9 +142,17 @@ def _run(args: list[str]) -> int:
     protocol, overrides = split_protocol(overrides)
     check_effects(protocol, exp)
 
+    parent = os.getpid()
+    started: list[str] = []  # the job folders this process entered (not those of joblib workers)
+
     def task(cfg) -> None:
+        from hydra.core.hydra_config import HydraConfig
+
+        interrupt.stop_with_parent(parent)  # in a joblib worker: stop when the parent is gone
+        started.append(HydraConfig.get().runtime.output_dir)
         try:
-            _hydra_task(cfg)
+            with interrupt.handle_termination():  # a joblib worker's main thread runs the task
+                _hydra_task(cfg, resume)
         except ArmlabError as exc:
             print(f"armlab: error: {exc}", file=sys.stderr)
             raise SystemExit(2) from None
@@ -120,11 +160,35 @@ def _run(args: list[str]) -> int:
     wrapped = hydra.main(config_path=str(CONFIG_DIR), config_name=protocol.name, version_base="1.3")(task)
     argv = sys.argv
     sys.argv = ["armlab"] + (["--multirun"] if multirun else []) + overrides
+    sweep_yaml = _sweep_dir(overrides) / "multirun.yaml" if multirun and resume else None
+    kept = keep_file(sweep_yaml) if sweep_yaml else None
     try:
-        wrapped()
+        with interrupt.handle_termination():
+            wrapped()
+    except interrupt.Interrupted as exc:
+        if multirun:
+            where = (
+                _sweep_dir(overrides) if any(o.startswith("hydra.sweep.dir=") for o in overrides) else None
+            )
+            fix = (
+                f"armlab run --multirun resume=true hydra.sweep.dir={where or '<sweep folder>'} <same sweep>"
+            )
+        else:
+            fix = f"armlab run resume=true hydra.run.dir={started[-1] if started else '<run folder>'}"
+        print(
+            f"armlab: interrupted ({exc}); the unfinished run is incomplete: finish it with `{fix}`",
+            file=sys.stderr,
+        )
+        return 128 + exc.signum
     finally:
         sys.argv = argv
+        if sweep_yaml:
+            restore_file(sweep_yaml, kept)
     return 0
+
+
+def _sweep_dir(overrides: list[str]) -> Path:
+    return Path([o.partition("=")[2] for o in overrides if o.startswith("hydra.sweep.dir=")][-1])
 
 
 def _estimate(args: list[str]) -> int:
@@ -141,10 +205,12 @@ def _estimate(args: list[str]) -> int:
 def _view(args: list[str]) -> int:
     import shutil
 
+    from armlab.data.rundir import require_complete
     from armlab.viz import view_command
 
     if len(args) != 1:
         return _fail("view needs exactly one run directory: armlab view <run_dir>")
+    require_complete(Path(args[0]))
     rrd = Path(args[0]) / "trials.rrd"
     if not rrd.is_file():
         return _fail(f"{rrd} not found; give a run directory made by `armlab run` with output.recording=true")

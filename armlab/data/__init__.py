@@ -1,5 +1,6 @@
 """The trial schema and trial files: what simulation and real labs hand to estimation."""
 
+from armlab.data.atomic import atomic_path
 from armlab.data.h5io import (
     FORMAT_NAME,
     FORMAT_VERSION,
@@ -20,6 +21,7 @@ from armlab.data.reklab import (
     list_ankle_trials,
     load_ankle_trial,
 )
+from armlab.data.rundir import require_complete, run_state
 from armlab.data.trial import TrialSet
 
 __all__ = [
@@ -38,4 +40,7 @@ __all__ = [
     "JointRecord",
     "load_joint_data",
     "write_joint_csv",
+    "atomic_path",
+    "run_state",
+    "require_complete",
 ]

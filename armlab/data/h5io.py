@@ -17,7 +17,6 @@ read, because real data must be cleaned before it reaches estimation.
 from __future__ import annotations
 
 import os
-import tempfile
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -25,6 +24,7 @@ from typing import Any
 import h5py
 import numpy as np
 
+from armlab.data.atomic import atomic_path
 from armlab.data.trial import TrialSet
 from armlab.errors import DataError
 
@@ -187,60 +187,38 @@ def write_trials(path: str | os.PathLike[str], trials: TrialSet, overwrite: bool
         if report:
             raise DataError(f"{path}: {report}")
 
-    fd, tmp_name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
-    os.close(fd)
-    tmp = Path(tmp_name)
-    umask = os.umask(0)  # mkstemp makes the file private; give it the permissions of open()
-    os.umask(umask)
-    tmp.chmod(0o666 & ~umask)
-    try:
-        with h5py.File(tmp, "w") as f:
-            f.attrs["format"] = FORMAT_NAME
-            f.attrs["format_version"] = FORMAT_VERSION
-            f.attrs["fs_hz"] = float(trials.fs_hz)
-            f.create_dataset("onset_index", data=np.asarray(trials.onset_index, dtype=np.int64))
-            ch = f.create_group("channels")
-            for name, a in trials.channels.items():
-                a = np.asarray(a, dtype=np.float64)
-                if a.size:  # one chunk per trial, compressed
-                    ds = ch.create_dataset(
-                        name,
-                        data=a,
-                        chunks=(1, *a.shape[1:]),
-                        compression="gzip",
-                        compression_opts=4,
-                        shuffle=True,
-                    )
-                else:  # HDF5 cannot chunk a zero-sized dimension
-                    ds = ch.create_dataset(name, data=a)
-                ds.attrs["unit"] = str(trials.units[name])
-            meta = f.create_group("trial_meta")
-            for key, v in trials.trial_meta.items():
-                v = np.asarray(v)
-                if v.dtype.kind in "US":
-                    meta.create_dataset(key, data=v.astype(str).astype(object), dtype=_STR)
-                elif v.dtype.kind in "biuf":
-                    meta.create_dataset(key, data=v)
-                else:
-                    raise DataError(
-                        f"{path}: trial_meta[{key!r}] has dtype {v.dtype}; use bool/int/float/str"
-                    )
-            grp = f.create_group("attrs")
-            for key, value in trials.attrs.items():
-                _write_value(grp, key, value, "attrs")
-        if overwrite:
-            os.replace(tmp, path)
-        else:
-            try:
-                os.link(tmp, path)  # atomic and never clobbers
-            except FileExistsError:
-                raise DataError(f"{path} already exists; pass overwrite=True to replace it") from None
-            except OSError:  # no hard links on this filesystem
-                if path.exists():
-                    raise DataError(f"{path} already exists; pass overwrite=True to replace it") from None
-                os.replace(tmp, path)
-    finally:
-        tmp.unlink(missing_ok=True)
+    with atomic_path(path, overwrite=overwrite) as tmp, h5py.File(tmp, "w") as f:
+        f.attrs["format"] = FORMAT_NAME
+        f.attrs["format_version"] = FORMAT_VERSION
+        f.attrs["fs_hz"] = float(trials.fs_hz)
+        f.create_dataset("onset_index", data=np.asarray(trials.onset_index, dtype=np.int64))
+        ch = f.create_group("channels")
+        for name, a in trials.channels.items():
+            a = np.asarray(a, dtype=np.float64)
+            if a.size:  # one chunk per trial, compressed
+                ds = ch.create_dataset(
+                    name,
+                    data=a,
+                    chunks=(1, *a.shape[1:]),
+                    compression="gzip",
+                    compression_opts=4,
+                    shuffle=True,
+                )
+            else:  # HDF5 cannot chunk a zero-sized dimension
+                ds = ch.create_dataset(name, data=a)
+            ds.attrs["unit"] = str(trials.units[name])
+        meta = f.create_group("trial_meta")
+        for key, v in trials.trial_meta.items():
+            v = np.asarray(v)
+            if v.dtype.kind in "US":
+                meta.create_dataset(key, data=v.astype(str).astype(object), dtype=_STR)
+            elif v.dtype.kind in "biuf":
+                meta.create_dataset(key, data=v)
+            else:
+                raise DataError(f"{path}: trial_meta[{key!r}] has dtype {v.dtype}; use bool/int/float/str")
+        grp = f.create_group("attrs")
+        for key, value in trials.attrs.items():
+            _write_value(grp, key, value, "attrs")
     return path
 
 

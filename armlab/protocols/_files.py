@@ -7,6 +7,7 @@ from pathlib import Path
 
 import numpy as np
 
+from armlab.data.atomic import write_text_atomic
 from armlab.errors import DataError
 
 __all__ = ["json_default", "new_dir", "write_json", "write_new"]
@@ -31,13 +32,12 @@ def new_dir(out: Path) -> Path:
 
 
 def write_new(path: Path, text: str) -> Path:
-    """Write a text file that must not exist yet (armlab never overwrites results)."""
-    try:
-        with Path(path).open("x") as fh:
-            fh.write(text)
-    except FileExistsError:
-        raise DataError(f"{path} exists; armlab never overwrites results — use a new run directory") from None
-    return Path(path)
+    """Write a text file that must not exist yet (armlab never overwrites results).
+
+    Written under a temporary name and renamed when complete (:mod:`armlab.data.atomic`): an
+    interrupted writer never leaves a truncated file under its name.
+    """
+    return write_text_atomic(path, text)
 
 
 def write_json(path: Path, data: dict) -> Path:

@@ -18,6 +18,7 @@ import numpy as np
 
 from armlab.config.diagnosis import REFEREE_SHARED_FIELDS, DiagnosisConfig, RefereeConfig
 from armlab.config.store import apply_overrides
+from armlab.data.rundir import require_complete
 from armlab.errors import ConfigError, DataError
 from armlab.protocols import registry
 from armlab.protocols._files import new_dir, write_json, write_new
@@ -53,6 +54,7 @@ def run_diagnosis(
     cfg = apply_overrides(DiagnosisConfig(), "diagnosis", overrides)
     if not Path(data).exists():
         raise DataError(f"data {str(data)!r} does not exist; give a trial file or a folder of them")
+    require_complete(Path(data))  # a run folder (or its trials.h5) of a run that did not finish
     t0 = time.perf_counter()
     results, series = run_diagnoser(Path(data), protocol, cfg)
     results["timing_s"] = {"diagnosis": time.perf_counter() - t0}

@@ -1,7 +1,9 @@
 """Run a protocol end to end and write its outputs — the edge where files and figures happen.
 
 Outputs in the run directory (never overwritten: a directory that already holds results is
-refused): ``results.json`` (docs/results_schema.md), ``trials.h5`` (docs/trial_format.md),
+refused; each file is written under a temporary name and renamed when complete, and
+``results.json`` is written last: it marks the run complete, see :mod:`armlab.data.rundir`):
+``results.json`` (docs/results_schema.md), ``trials.h5`` (docs/trial_format.md),
 ``scene.xml`` (the composed MJCF), and what the protocol's ``outputs`` hook writes (its figures,
 tables and ``trials.rrd``, the rerun recording of every trial). The protocol comes from the
 registry; nothing here names one.
@@ -17,6 +19,7 @@ from omegaconf import OmegaConf
 
 from armlab.config.schema import ExperimentConfig
 from armlab.data.h5io import read_trials, write_trials
+from armlab.data.rundir import MARKER, partial_files, require_complete, resume_command, run_state
 from armlab.data.trial import TrialSet
 from armlab.errors import ConfigError, DataError
 from armlab.protocols import registry
@@ -85,14 +88,20 @@ def run_protocol(cfg: ExperimentConfig, out_dir: Path, config_yaml: str = "") ->
     registry.get(cfg.protocol_name, need="run")
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    if (out_dir / "results.json").exists():
+    if run_state(out_dir) == "complete":
         raise DataError(f"{out_dir} already holds results.json; armlab never overwrites a run")
+    left = partial_files(out_dir)
+    if left:  # refused before simulating, not after
+        raise DataError(
+            f"{out_dir} holds outputs of an unfinished run ({', '.join(p.name for p in left)}); "
+            f"finish it with `{resume_command(out_dir)}`, or choose a new run directory"
+        )
     timing: dict = {}
     t0 = time.perf_counter()
     results = _run(cfg, out_dir, config_yaml, timing)
     timing["total_s"] = time.perf_counter() - t0
     results["timing"] = timing
-    write_json(out_dir / "results.json", results)
+    write_json(out_dir / MARKER, results)  # last: it marks the run complete (armlab.data.rundir)
     return results
 
 
@@ -102,10 +111,13 @@ def reestimate(run_dir: Path, overrides: list[str] | None = None) -> tuple[Path,
     The settings come from the run's stored config, updated by overrides of the protocol's
     re-estimation group (``<group>.<field>=<value>``; the group is the protocol's
     ``reestimate_group``). Results go to a new ``reestimate_<timestamp>/`` directory inside the run
-    directory.
+    directory, with ``overrides.yaml`` (the overrides given) and ``config.yaml`` (the stored
+    config they were applied to); ``results.json`` (written last) repeats both under
+    ``"reestimate"``.
     """
     run_dir = Path(run_dir)
     path = run_dir / "trials.h5"
+    require_complete(run_dir)
     if not path.is_file():
         raise DataError(f"{run_dir} has no trials.h5; give a run directory made by `armlab run`")
     trials = read_trials(path)
@@ -115,10 +127,14 @@ def reestimate(run_dir: Path, overrides: list[str] | None = None) -> tuple[Path,
         protocol = registry.get(name, need="estimate")
     except ConfigError as exc:
         raise DataError(f"{path} holds trials of protocol {name!r}: {exc}") from None
-    results = protocol.reestimate(trials, stored, list(overrides or []))
+    overrides = list(overrides or [])
+    results = protocol.reestimate(trials, stored, overrides)
     out = run_dir / f"reestimate_{datetime.now():%Y-%m-%d_%H-%M-%S-%f}"
     out.mkdir()
-    write_json(out / "results.json", results)
+    write_new(out / "overrides.yaml", OmegaConf.to_yaml(overrides))
+    write_new(out / "config.yaml", OmegaConf.to_yaml(stored))
+    results["reestimate"] = {"run": str(run_dir), "trials": str(path), "overrides": overrides}
+    write_json(out / MARKER, results)
     return out, results
 
 

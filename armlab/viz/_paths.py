@@ -2,11 +2,14 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
+from armlab.data.atomic import atomic_path
 from armlab.errors import DataError
 
-__all__ = ["fresh_path", "save_png"]
+__all__ = ["fresh_path", "recording", "save_png"]
 
 DPI = 120  # dots per inch of every written figure
 
@@ -36,12 +39,31 @@ def fresh_path(path: str | Path, suffix: str) -> Path:
 def save_png(fig, path: str | Path, dpi: int = DPI) -> Path:
     """Write a matplotlib ``Figure`` as a new PNG file (:func:`fresh_path` rules); returns the path.
 
-    The file is opened ``"xb"``: never overwritten, even if one appeared since the check.
+    The figure is drawn into a temporary file and given its name only when complete
+    (:func:`armlab.data.atomic.atomic_path`): never overwritten, never half-written.
     """
     from matplotlib.backends.backend_agg import FigureCanvasAgg  # plotting only when plotting
 
     p = fresh_path(path, ".png")
     FigureCanvasAgg(fig)
-    with open(p, "xb") as fh:
+    with atomic_path(p) as tmp, open(tmp, "wb") as fh:
         fig.savefig(fh, format="png", dpi=dpi)
     return p
+
+
+@contextmanager
+def recording(path: Path, application_id: str, blueprint=None) -> Iterator:
+    """A rerun ``RecordingStream`` saving to the new ``.rrd`` file ``path`` (checked by
+    :func:`fresh_path`), written under a temporary name and renamed only once the stream is
+    flushed and closed: an interrupted writer never leaves a truncated recording under its name.
+    """
+    import rerun as rr  # recordings only when recording
+
+    with atomic_path(path) as tmp:
+        rec = rr.RecordingStream(application_id)
+        rec.save(tmp, default_blueprint=blueprint)
+        try:
+            yield rec
+            rec.flush()
+        finally:
+            rec.disconnect()

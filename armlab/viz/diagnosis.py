@@ -36,7 +36,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from armlab.errors import DataError
-from armlab.viz._paths import fresh_path, save_png
+from armlab.viz._paths import fresh_path, recording, save_png
 
 __all__ = [
     "diagnosis_figures",
@@ -332,9 +332,7 @@ def diagnosis_recording(
         for group in series.values()
         for i, tr in enumerate(group["trials"])
     ]
-    rec = rr.RecordingStream(app_id)
-    rec.save(p, default_blueprint=_blueprint(rrb, [b for b, _, _ in todo]))
-    try:
+    with recording(p, app_id, _blueprint(rrb, [b for b, _, _ in todo])) as rec:
         for base, group, i in todo:
             tr = group["trials"][i]
             t = np.asarray(tr.t_s, dtype=float)
@@ -366,7 +364,4 @@ def diagnosis_recording(
                         text=["held-out part starts: models fitted before, scored after"], level=["INFO"]
                     ),
                 )
-        rec.flush()
-    finally:
-        rec.disconnect()
     return p

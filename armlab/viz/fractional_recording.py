@@ -18,7 +18,7 @@ import numpy as np
 
 from armlab.data.trial import TrialSet
 from armlab.errors import ConfigError, DataError
-from armlab.viz._paths import fresh_path
+from armlab.viz._paths import fresh_path, recording
 from armlab.viz.fractional_table import _num, format_fractional_table
 
 __all__ = ["FRACTIONAL_SCALAR_CHANNELS", "write_fractional_recording"]
@@ -154,10 +154,8 @@ def write_fractional_recording(
             groups[c] = [c]
     text = format_fractional_table(results) if results else None
 
-    rec = rr.RecordingStream("armlab")
     bp = _blueprint(rrb, trial_paths, groups, poses, text is not None) if blueprint else None
-    rec.save(p, default_blueprint=bp)
-    try:
+    with recording(p, "armlab", bp) as rec:
         rows = np.arange(0, n, step_scalar)
         time_col = [rr.TimeColumn(_TRIAL_TIMELINE, duration=rows / fs)]
         idx = np.arange(0, n, step_3d)
@@ -230,7 +228,4 @@ def write_fractional_recording(
                 )
         if text is not None:
             rec.log("results/summary", rr.TextDocument(text, media_type=rr.MediaType.TEXT), static=True)
-        rec.flush()
-    finally:
-        rec.disconnect()
     return p

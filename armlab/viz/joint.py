@@ -15,6 +15,7 @@ import numpy as np
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
+from armlab.data.atomic import atomic_path
 from armlab.errors import DataError
 from armlab.viz._paths import fresh_path
 
@@ -50,5 +51,6 @@ def plot_joint_bode(series: Mapping[str, Mapping], path: str | Path) -> Path:
     axes[0, 0].set_ylabel("|Z| (dB re 1 N·m/rad)")
     axes[1, 0].set_ylabel("phase (deg)")
     axes[0, 0].legend(fontsize=7)
-    fig.savefig(path)
+    with atomic_path(path) as tmp:  # named only once complete
+        fig.savefig(tmp, format="png")
     return path

@@ -29,7 +29,7 @@ import numpy as np
 
 from armlab.data.trial import TrialSet
 from armlab.errors import ConfigError, DataError
-from armlab.viz._paths import fresh_path
+from armlab.viz._paths import fresh_path, recording
 
 __all__ = [
     "write_recording",
@@ -268,14 +268,12 @@ def write_recording(
     )
     truth = _truth_params(results, windows, ground_truth) if windows else {}
 
-    rec = rr.RecordingStream("armlab")
     bp = (
         _blueprint(rrb, trial_paths, group, channels, pose_entities, t_obs_by_k, models, list(truth))
         if blueprint
         else None
     )
-    rec.save(p, default_blueprint=bp)
-    try:
+    with recording(p, "armlab", bp) as rec:
         for i, base in enumerate(trial_paths):
             onset = int(onsets[i])
             start = max(0, onset - pre)
@@ -334,9 +332,6 @@ def write_recording(
             for name, values in truth.items():
                 rec.log(f"truth/{name}", rr.SeriesLines(names=f"{name} (truth)", widths=1.0), static=True)
                 rec.send_columns(f"truth/{name}", indexes=w_idx, columns=rr.Scalars.columns(scalars=values))
-        rec.flush()
-    finally:
-        rec.disconnect()
     return p
 
 

@@ -20,7 +20,7 @@ from matplotlib.figure import Figure
 
 from armlab.data.trial import TrialSet
 from armlab.errors import DataError
-from armlab.viz._paths import fresh_path, save_png
+from armlab.viz._paths import fresh_path, recording, save_png
 
 __all__ = ["format_vfs_tables", "plot_vfs_figures", "write_vfs_recording"]
 
@@ -182,25 +182,23 @@ def write_vfs_recording(
     p = fresh_path(path, ".rrd")
     step = max(1, int(round(trials.fs_hz / max_hz)))
     times = np.arange(0, trials.n_samples, step) / trials.fs_hz
-    rec = rr.RecordingStream(application_id)
-    rec.save(str(p))
-    meta = trials.trial_meta
-    for i in range(trials.n_trials):
-        name = "_".join(
-            x for x in (str(meta["kind"][i]), str(meta["stiffness"][i]), str(meta["payload"][i])) if x
-        )
-        base = f"trials/{name}_{int(meta['trial'][i])}"
-        for ch in ("theta", "tau", "acc_site", "ft_site", "true_x"):
-            if ch not in trials.channels:
-                continue
-            data = np.asarray(trials.channels[ch][i, ::step], dtype=np.float32).astype(np.float64)
-            for a, axis in enumerate(("1", "2") if ch in ("theta", "tau") else ("x", "y")):
-                rec.send_columns(
-                    f"{base}/{ch}/{axis}",
-                    indexes=[rr.TimeColumn("trial_time", duration=times)],
-                    columns=rr.Scalars.columns(scalars=data[:, a]),
-                )
-    if results is not None:
-        rec.log("results", rr.TextDocument(format_vfs_tables(results)), static=True)
-    rec.flush()
+    with recording(p, application_id) as rec:
+        meta = trials.trial_meta
+        for i in range(trials.n_trials):
+            name = "_".join(
+                x for x in (str(meta["kind"][i]), str(meta["stiffness"][i]), str(meta["payload"][i])) if x
+            )
+            base = f"trials/{name}_{int(meta['trial'][i])}"
+            for ch in ("theta", "tau", "acc_site", "ft_site", "true_x"):
+                if ch not in trials.channels:
+                    continue
+                data = np.asarray(trials.channels[ch][i, ::step], dtype=np.float32).astype(np.float64)
+                for a, axis in enumerate(("1", "2") if ch in ("theta", "tau") else ("x", "y")):
+                    rec.send_columns(
+                        f"{base}/{ch}/{axis}",
+                        indexes=[rr.TimeColumn("trial_time", duration=times)],
+                        columns=rr.Scalars.columns(scalars=data[:, a]),
+                    )
+        if results is not None:
+            rec.log("results", rr.TextDocument(format_vfs_tables(results)), static=True)
     return p
