@@ -244,6 +244,11 @@ class EstimatorConfig:
                 f"{self.constancy_tol_per_s}",
             )
         if self.t_obs_s is not None:
+            check(
+                len(self.t_obs_s) > 0,
+                "estimator.t_obs_s is empty; give observation windows in s (e.g. [0.3,0.4]) or null for "
+                "the scenario's T_k + 70 ms",
+            )
             bad = [t for t in self.t_obs_s if not (math.isfinite(t) and t > 0)]
             check(not bad, f"estimator.t_obs_s must hold positive times in s, got {bad}")
 
@@ -439,4 +444,5 @@ class ExperimentConfig:
     effects: EffectsConfig = field(default_factory=EffectsConfig)  # the catalogue, all off by default
 
     def __post_init__(self) -> None:
-        check(self.seed >= 0, f"seed must be a non-negative integer, got {self.seed}")
+        # trials.h5 stores the seed as a 64-bit integer attribute
+        check(0 <= self.seed < 2**63, f"seed must be an integer in [0, 2**63), got {self.seed}")

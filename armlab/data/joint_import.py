@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from armlab.data.joint_record import _RATE_RTOL, JointRecord, _check_samples
+from armlab.data.joint_units import JointUnits, apply_units, parse_units
 from armlab.errors import DataError
 
 __all__ = [
@@ -135,25 +136,38 @@ def _read_csv(path: Path) -> JointRecord:
 # --- public entry points --------------------------------------------------------------------------
 def _read_file(path: Path) -> list[JointRecord]:
     suffix = path.suffix.lower()
-    if suffix == ".csv":
-        return [_read_csv(path)]
-    if suffix == ".mat":
-        from armlab.data.mat_import import read_mat  # matio is imported only for .mat files
+    try:
+        if suffix == ".csv":
+            return [_read_csv(path)]
+        if suffix == ".mat":
+            from armlab.data.mat_import import read_mat  # matio is imported only for .mat files
 
-        return read_mat(path)
+            return read_mat(path)
+    except UnicodeDecodeError as exc:
+        raise DataError(
+            f"{path}: is not a text CSV (byte {exc.start} is not UTF-8: a binary file?); expected comma-"
+            f"separated text with the header {','.join(JOINT_COLUMNS)}"
+        ) from None
+    except OSError as exc:
+        raise DataError(f"{path}: cannot be read ({exc.strerror or exc}); check its permissions") from None
     raise DataError(
         f"{path.name}: unsupported file type {path.suffix or '(no extension)'!r}; supported: "
         f"{list(SUPPORTED_SUFFIXES)} or a folder holding such files"
     )
 
 
-def load_joint_data(path: Path | str, *, min_duration_s: float = 0.0) -> tuple[JointRecord, ...]:
+def load_joint_data(
+    path: Path | str, *, min_duration_s: float = 0.0, units: str | JointUnits | None = None
+) -> tuple[JointRecord, ...]:
     """Read joint-perturbation trials from one file or a folder (format in docs/data_import.md).
 
     Args:
         path: a ``.csv`` file (one trial), a ``.mat`` file (one trial per mapped variable), or a
             folder: every ``*.csv`` and ``*.mat`` in it, by file name, not recursive.
         min_duration_s: s, refuse any trial shorter than this (``n_samples / fs_hz``).
+        units: the units of the angle and torque columns when they are not SI (``"deg"``,
+            ``"Nmm"``, ``"deg,Nmm"``; ``"rad,Nm"`` states SI); unstated channels are read as rad
+            and N·m and checked against human ranges (:mod:`armlab.data.joint_units`).
 
     Returns:
         The trials, in file-name order and, within a ``.mat``, variable-name order.
@@ -163,9 +177,12 @@ def load_joint_data(path: Path | str, *, min_duration_s: float = 0.0) -> tuple[J
             supported file, has files of different sample rates or two trials of one name; a
             file's columns or variables are missing or unmappable, its cells non-numeric or
             non-finite, its time not strictly increasing or not uniformly sampled; a trial is
-            shorter than ``min_duration_s``.
+            shorter than ``min_duration_s``; a file that is not text or cannot be read; an
+            unstated unit outside human ranges (the message names the likely unit); an unknown
+            unit.
     """
     path = Path(path)
+    stated = units if isinstance(units, JointUnits) else parse_units(units)
     if not (math.isfinite(min_duration_s) and min_duration_s >= 0):
         raise DataError(f"min_duration_s must be a finite number of seconds >= 0, got {min_duration_s}")
     if not path.exists():
@@ -184,7 +201,7 @@ def load_joint_data(path: Path | str, *, min_duration_s: float = 0.0) -> tuple[J
             )
     else:
         files = [path]
-    records = [r for f in files for r in _read_file(f)]
+    records = [apply_units(r, stated) for f in files for r in _read_file(f)]
     names = [r.name for r in records]
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:

@@ -16,7 +16,7 @@ from armlab.protocols.joint_1dof.diagnosis.rules import RULES
 __all__ = ["HOOKS"]
 
 HOOKS = DiagnosisHooks(
-    load=lambda path, cfg: load_joint_data(path, min_duration_s=cfg.min_duration_s),
+    load=lambda path, cfg, units=None: load_joint_data(path, min_duration_s=cfg.min_duration_s, units=units),
     diagnose=diagnose_joint,
     candidates=tuple(JOINT_SURROGATES),
     rules=RULES,
