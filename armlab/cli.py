@@ -294,24 +294,25 @@ def _benchmark(args: list[str]) -> int:
     return 0
 
 
-def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:
-    """armlab's own warnings on one line (``armlab: warning: ...``); others as Python prints them."""
-    if issubclass(category, ArmlabWarning):
-        print(f"armlab: warning: {message}", file=sys.stderr)
-    else:
-        _PYTHON_SHOWWARNING(message, category, filename, lineno, file, line)
-
-
-_PYTHON_SHOWWARNING = warnings.showwarning
-
-
 def main(argv: list[str] | None = None) -> int:
     """The ``armlab`` command; returns the exit status (2 on bad input, with one ``armlab: error:``
     line). An exception no check foresaw is reported as an internal error on one line as well (the
     traceback with ``ARMLAB_DEBUG=1``): a safety net, not a way of handling bad input."""
+    shown: set[str] = set()
+    python_show = warnings.showwarning
+
+    def show(message, category, filename, lineno, file=None, line=None) -> None:
+        """armlab's warnings on one line (``armlab: warning: ...``), each once per command (a sweep
+        checks every value); others as Python prints them."""
+        if not issubclass(category, ArmlabWarning):
+            python_show(message, category, filename, lineno, file, line)
+        elif str(message) not in shown:
+            shown.add(str(message))
+            print(f"armlab: warning: {message}", file=sys.stderr)
+
     with warnings.catch_warnings():
-        warnings.simplefilter("once", ArmlabWarning)  # a warning repeated by a sweep's checks: once
-        warnings.showwarning = _show_warning
+        warnings.simplefilter("always", ArmlabWarning)
+        warnings.showwarning = show
         try:
             return _main(argv)
         except ArmlabError as exc:

@@ -68,6 +68,12 @@ def _csv_layout(path: Path, header: list[str]) -> tuple[str, ...]:
         (TIME_VARYING_COLUMNS, JOINT_COLUMNS) if time_varying else (JOINT_COLUMNS, TIME_VARYING_COLUMNS)
     )
     missing = [c for c in expected if c not in header]
+    other_sep = [sep for sep in (";", "\t", "|") if any(sep in h for h in header)]
+    if missing and other_sep:
+        raise DataError(
+            f"{path.name}: the header {header} looks {other_sep[0]!r}-separated; armlab reads "
+            f"comma-separated CSV with the columns {list(expected)} (or {list(other)})"
+        )
     if missing:
         raise DataError(
             f"{path.name}: missing column(s) {missing}; expected {list(expected)} (the other layout: "
@@ -206,12 +212,6 @@ def load_joint_data(
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
         raise DataError(f"{path}: several trials named {dup}; rename the files so each trial name is unique")
-    for r in records:
-        if r.duration_s < min_duration_s:
-            raise DataError(
-                f"{r.path.name}: trial {r.name!r} lasts {r.duration_s:.9g} s, shorter than "
-                f"min_duration_s = {min_duration_s:.9g} s"
-            )
     ref = records[0].fs_hz
     if path.is_dir() and any(abs(r.fs_hz - ref) > _RATE_RTOL * ref for r in records):
         rates = ", ".join(f"{r.name}: {r.fs_hz:.9g} Hz" for r in records)
@@ -219,6 +219,12 @@ def load_joint_data(
             f"{path}: the files have different sample rates ({rates}); one folder must hold one rate "
             f"(resample, or load the files separately)"
         )
+    for r in records:
+        if r.duration_s < min_duration_s:
+            raise DataError(
+                f"{r.path.name}: trial {r.name!r} lasts {r.duration_s:.9g} s, shorter than "
+                f"min_duration_s = {min_duration_s:.9g} s"
+            )
     return tuple(records)
 
 

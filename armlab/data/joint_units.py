@@ -104,6 +104,11 @@ def _check(record: JointRecord, units: JointUnits) -> None:
     if units.angle is None:
         angles = [record.position] + ([record.operating_point] if record.operating_point is not None else [])
         peak = max(float(np.max(np.abs(a))) for a in angles)
+        if peak > 180.0:  # beyond the same range in degrees too
+            raise DataError(
+                f"{where}: the joint angle reaches {peak:.4g}, beyond any human joint's range in rad (<= pi) "
+                f"and in degrees (<= 180); check the angle column"
+            )
         if peak > MAX_ANGLE_RAD:
             raise DataError(
                 f"{where}: the joint angle reaches {peak:.4g}, beyond any human joint's range (|angle| <= "
@@ -111,6 +116,11 @@ def _check(record: JointRecord, units: JointUnits) -> None:
             )
     if units.torque is None:
         peak = float(np.max(np.abs(record.torque)))
+        if peak > 1000 * MAX_TORQUE_NM:  # beyond the same bound in N·mm too
+            raise DataError(
+                f"{where}: the torque reaches {peak:.4g}, beyond any human joint in N·m "
+                f"(<= {MAX_TORQUE_NM:g}) and in N·mm (<= {1000 * MAX_TORQUE_NM:g}); check the torque column"
+            )
         if peak > MAX_TORQUE_NM:
             raise DataError(
                 f"{where}: the torque reaches {peak:.4g}, beyond any human joint (|torque| <= "
