@@ -71,6 +71,11 @@ def files(tmp_path_factory) -> dict[str, Path]:
     for name, text in texts.items():
         f[name] = d / f"{name}.csv"
         f[name].write_text(text)
+    f["garbage_mat"] = d / "garbage.mat"
+    f["garbage_mat"].write_bytes(bytes(range(200)))
+    f["fake_run"] = d / "fake_run"
+    f["fake_run"].mkdir()
+    (f["fake_run"] / "trials.h5").write_text(header + good)  # a CSV under the trial file's name
     f["txt"] = d / "trial.txt"
     f["txt"].write_text(header + good)
     f["binary"] = d / "binary.csv"
@@ -171,6 +176,17 @@ RUN = [
     ("adding-hydra-key", ["+hydra.foo=1"], ["+hydra.foo=1", "adds none", "hydra.run.dir"]),
     ("bad-bool", ["output.figures=maybe"], ["output.figures", "not a valid bool"]),
     ("unknown-option", ["--foo"], ["['--foo']", "--multirun"]),
+    ("empty-run-dir", ["hydra.run.dir="], ["hydra.run.dir=", "give a folder"]),
+    (
+        "pair-of-one",
+        ["protocol=fractional_elbow", "frf.band_hz=[1]"],
+        ["frf.band_hz must hold 2 values", "[1.0]"],
+    ),
+    (
+        "pair-of-three",
+        ["protocol=virtual_force_sensor", "vfs.band_hz=[1,2,3]"],
+        ["vfs.band_hz must hold 2 values"],
+    ),
     ("negative-n-trials", ["scenario.n_trials=-3"], ["scenario.n_trials must be >= 2", "-3"]),
     ("negative-cuff", ["cuff.stiffness_N_per_m=-1"], ["cuff.stiffness_N_per_m must be > 0"]),
     ("sweep-bad-value", ["-m", "seed=0,abc"], ["seed=abc", "Integer"]),
@@ -229,6 +245,8 @@ OTHER = [
     ("estimate-other-group", ["estimate", "{run}", "estimator.lowpass_hz=30"], ["frf.<field>=<value>"]),
     ("estimate-nan", ["estimate", "{run}", "frf.welch_overlap=nan"], ["frf.welch_overlap", "[0, 1)"]),
     ("estimate-inf", ["estimate", "{run}", "frf.fir_attenuation_db=inf"], ["frf.fir_attenuation_db=inf"]),
+    ("estimate-pair-of-one", ["estimate", "{run}", "frf.band_hz=[1]"], ["frf.band_hz must hold 2 values"]),
+    ("estimate-not-hdf5", ["estimate", "{fake_run}"], ["trials.h5: not a readable HDF5 file"]),
     ("view-no-dir", ["view"], ["view needs exactly one run directory"]),
     ("view-two-dirs", ["view", "a", "b"], ["view needs exactly one run directory"]),
     ("view-file", ["view", "{ok}"], ["trials.rrd not found", "output.recording=true"]),
@@ -316,6 +334,16 @@ OTHER = [
         ["diagnose", "data={dup_header}", "protocol=joint_1dof"],
         ["duplicate column(s)"],
     ),
+    (
+        "diagnose-garbage-mat",
+        ["diagnose", "data={garbage_mat}", "protocol=joint_1dof"],
+        ["garbage.mat", "7.3"],
+    ),
+    (
+        "diagnose-empty-folder",
+        ["diagnose", "data={nonempty}", "protocol=joint_1dof"],
+        ["no trial files", "*.csv"],
+    ),
     ("diagnose-mixed-rates", ["diagnose", "data={mixed}", "protocol=joint_1dof"], ["different sample rates"]),
     (
         "diagnose-inf-setting",
@@ -323,6 +351,7 @@ OTHER = [
         ["diagnosis.bic_margin=inf is not a finite number"],
     ),
     ("effects-empty-protocol", ["effects", "protocol="], ["no effects for protocol ''", "valid protocols"]),
+    ("benchmark-no-jobs", ["diagnose-benchmark", "referee.jobs=0"], ["referee.jobs must be", "-1"]),
     ("benchmark-bad-jobs", ["diagnose-benchmark", "referee.jobs=abc"], ["referee.jobs=abc", "Integer"]),
     (
         "benchmark-out-not-empty",

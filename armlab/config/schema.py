@@ -17,7 +17,7 @@ import numpy as np
 from armlab.config import choices
 from armlab.config.capstan import CapstanConfig, VfsConfig
 from armlab.config.effects import EffectsConfig
-from armlab.config.validate import check, choice
+from armlab.config.validate import check, check_tuple_lengths, choice
 from armlab.errors import ConfigError
 
 __all__ = [
@@ -284,6 +284,7 @@ class ElbowConfig:
     oustaloup_order: int = 6  # pole-zero pairs per side, 2N + 1 in all
 
     def __post_init__(self) -> None:
+        check_tuple_lengths(self, "elbow")
         choice("elbow.model", self.model, choices.ElbowModel)
         choice("elbow.impedance", self.impedance, choices.ElbowImpedance)
         check(
@@ -386,6 +387,7 @@ class FrfConfig:
     filter_force: bool = False
 
     def __post_init__(self) -> None:
+        check_tuple_lengths(self, "frf")
         check(
             0 < self.fir_pass_hz < self.fir_stop_hz,
             "frf.fir_pass_hz must be > 0 and below frf.fir_stop_hz, "
@@ -409,7 +411,8 @@ class FrfConfig:
         lo, hi = self.band_hz
         check(
             hi < fs_hz / 2,
-            f"frf.band_hz upper edge {hi} Hz is at or beyond Nyquist ({fs_hz / 2} Hz); valid: < {fs_hz / 2}",
+            f"frf.band_hz upper edge {hi:g} Hz is at or beyond Nyquist ({fs_hz / 2:.6g} Hz); "
+            f"valid: < {fs_hz / 2:.6g}",
         )
         check(
             self.welch_window <= n_samples,

@@ -9,13 +9,14 @@ from __future__ import annotations
 
 import math
 from dataclasses import fields, is_dataclass
-from typing import Any, Literal, get_args, get_origin
+from typing import Any, Literal, get_args, get_origin, get_type_hints
 
 from armlab.errors import ConfigError
 
 __all__ = [
     "check",
     "check_finite",
+    "check_tuple_lengths",
     "choice",
     "divisor_rates",
     "options",
@@ -84,3 +85,18 @@ def divisor_rates(physics_hz: float, count: int = 6) -> list[float]:
     (``physics_hz / n`` for n = 1, 2, ... that are whole numbers of Hz), for error messages."""
     rates = [physics_hz / n for n in range(1, 1000) if abs(physics_hz / n - round(physics_hz / n)) < 1e-9]
     return [float(f"{r:g}") for r in rates[:count]]
+
+
+def check_tuple_lengths(cfg: Any, prefix: str) -> None:
+    """Raise :class:`ConfigError` when a fixed-length tuple field (``tuple[float, float]``) of the
+    config dataclass ``cfg`` holds another number of values (``frf.band_hz=[1]``), naming it.
+
+    Called first in a ``__post_init__``, before the checks that unpack those tuples.
+    """
+    for name, hint in get_type_hints(type(cfg)).items():
+        args = get_args(hint)
+        if get_origin(hint) is not tuple or not args or Ellipsis in args:
+            continue
+        value = getattr(cfg, name, None)
+        if value is not None and len(value) != len(args):
+            raise ConfigError(f"{prefix}.{name} must hold {len(args)} values, got {list(value)}")

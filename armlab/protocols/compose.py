@@ -64,6 +64,10 @@ def _check(protocol: Protocol, overrides: list[str]) -> None:
                 f"{item}: armlab sets Hydra's existing settings and groups (e.g. hydra.run.dir=<dir>, "
                 f"hydra.sweep.dir=<dir>, hydra/launcher=joblib) but adds none; drop the '+'"
             )
+        if bare in ("hydra.run.dir", "hydra.sweep.dir") and not value.strip():
+            raise ConfigError(
+                f"{item}: give a folder (e.g. {bare}=outputs/my_run); an empty one is the working folder"
+            )
         if top == "hydra" or top.startswith("hydra/"):  # Hydra's own settings and groups (launcher, ...)
             continue
         if bare in seen:
