@@ -149,8 +149,9 @@ def _run(args: list[str]) -> int:
         except Exception as exc:  # noqa: BLE001 - Hydra would print a traceback hint instead
             if os.environ.get("ARMLAB_DEBUG"):
                 raise
+            msg = " ".join(str(exc).split())
             print(
-                f"armlab: error: internal error: {type(exc).__name__}: {exc} (please report it; rerun "
+                f"armlab: error: internal error: {type(exc).__name__}: {msg} (please report it; rerun "
                 "with ARMLAB_DEBUG=1 for the traceback)",
                 file=sys.stderr,
             )
