@@ -112,6 +112,13 @@ def files(tmp_path_factory) -> dict[str, Path]:
     raw[chunk.byte_offset : chunk.byte_offset + chunk.size] = b"\xff" * chunk.size
     (bad / "trials.h5").write_bytes(bytes(raw))
     f["bad_run"] = bad
+    cond = d / "cond_run"  # a conditioning_window trial file: 0.3 s recorded before onset
+    cond.mkdir()
+    write_trials(
+        cond / "trials.h5",
+        replace(trials, onset_index=np.array([300, 300]), attrs={"protocol": "conditioning_window"}),
+    )
+    f["cond_run"] = cond
     other = d / "other_run"
     other.mkdir()
     write_trials(other / "trials.h5", replace(trials, attrs={"protocol": "nope"}))
@@ -245,6 +252,16 @@ OTHER = [
     ("estimate-other-group", ["estimate", "{run}", "estimator.lowpass_hz=30"], ["frf.<field>=<value>"]),
     ("estimate-nan", ["estimate", "{run}", "frf.welch_overlap=nan"], ["frf.welch_overlap", "[0, 1)"]),
     ("estimate-inf", ["estimate", "{run}", "frf.fir_attenuation_db=inf"], ["frf.fir_attenuation_db=inf"]),
+    (
+        "estimate-lowpass-above-nyquist",
+        ["estimate", "{cond_run}", "estimator.lowpass_hz=900"],
+        ["estimator.lowpass_hz=900", "below 500 Hz"],
+    ),
+    (
+        "estimate-baseline-too-long",
+        ["estimate", "{cond_run}", "estimator.baseline_s=5"],
+        ["estimator.baseline_s=5", "<= 0.3 s"],
+    ),
     ("estimate-pair-of-one", ["estimate", "{run}", "frf.band_hz=[1]"], ["frf.band_hz must hold 2 values"]),
     ("estimate-not-hdf5", ["estimate", "{fake_run}"], ["trials.h5: not a readable HDF5 file"]),
     ("view-no-dir", ["view"], ["view needs exactly one run directory"]),

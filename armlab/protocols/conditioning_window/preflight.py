@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import warnings
 
+from armlab.config.schema import EstimatorConfig
 from armlab.config.validate import divisor_rates
 from armlab.errors import ArmlabWarning, ConfigError
 from armlab.perturbations.scenario import load_scenario
@@ -19,13 +20,29 @@ from armlab.protocols.conditioning_window.experiment import check_window_lengths
 from armlab.sensors.channel import ChannelSpec
 from armlab.sensors.presets import SensorSuite
 
-__all__ = ["QUINTIC_BAND_PER_S", "validate"]
+__all__ = ["QUINTIC_BAND_PER_S", "check_estimator", "validate"]
 
 # 1/s: 99.9 % of the energy of a quintic point-to-point move's acceleration (eq. (16), a cubic
 # over T_k) lies below 5.6 / T_k Hz (computed from its spectrum, 5.56 / T_k). The estimator
 # differentiates the joint angles twice, so the record's Nyquist frequency must lie above
 # 5.6 / T_k for the shortest T_k (e.g. >= 224 Hz sampling for a 50 ms move).
 QUINTIC_BAND_PER_S = 5.6
+
+
+def check_estimator(estimator: EstimatorConfig, fs_hz: float, pre_onset_s: float) -> None:
+    """ConfigError if the estimator's low-pass is not below Nyquist or its baseline is longer than
+    the hold recorded before onset (checked before a run and before ``armlab estimate``)."""
+    lowpass = estimator.lowpass_hz
+    if lowpass is not None and not lowpass < fs_hz / 2:
+        raise ConfigError(
+            f"estimator.lowpass_hz={lowpass:g} Hz is at or above the Nyquist frequency {fs_hz / 2:g} Hz "
+            f"(sensors.fs_hz={fs_hz:g}); valid: below {fs_hz / 2:g} Hz, or null for no low-pass"
+        )
+    if estimator.baseline_s > pre_onset_s + 1e-12:
+        raise ConfigError(
+            f"estimator.baseline_s={estimator.baseline_s:g} s is longer than the hold recorded before "
+            f"onset ({pre_onset_s:g} s); valid: <= {pre_onset_s:g} s"
+        )
 
 
 def validate(cfg: ConditioningWindowConfig) -> None:
@@ -62,18 +79,7 @@ def validate(cfg: ConditioningWindowConfig) -> None:
             )
         except ConfigError as exc:
             raise ConfigError(f"sensors.fs_hz={fs:g}: {exc}") from None
-    lowpass = cfg.estimator.lowpass_hz
-    if lowpass is not None and not lowpass < fs / 2:
-        raise ConfigError(
-            f"estimator.lowpass_hz={lowpass:g} Hz is at or above the Nyquist frequency {fs / 2:g} Hz "
-            f"(sensors.fs_hz={fs:g}); valid: below {fs / 2:g} Hz, or null for no low-pass"
-        )
-    if cfg.estimator.baseline_s > scenario.pre_onset_record_s:
-        raise ConfigError(
-            f"estimator.baseline_s={cfg.estimator.baseline_s:g} s is longer than the hold recorded before "
-            f"onset ({scenario.pre_onset_record_s:g} s, the scenario's pre_onset_record_s); valid: "
-            f"<= {scenario.pre_onset_record_s:g} s"
-        )
+    check_estimator(cfg.estimator, fs, scenario.pre_onset_record_s)
     specs = window_specs(scenario, cfg.estimator)
     check_window_lengths(specs, fs, n_samples - onset)
     if cfg.reflex.enabled:
