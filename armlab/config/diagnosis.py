@@ -49,6 +49,11 @@ class DiagnosisConfig:
             f"diagnosis.highpass_hz must lie in (0, band_hz={self.band_hz}), got {self.highpass_hz}",
         )
         check(
+            0 < self.slow_hz < self.band_hz,
+            f"diagnosis.slow_hz (the tonic torque's cut-off) must lie in (0, band_hz={self.band_hz}), "
+            f"got {self.slow_hz}",
+        )
+        check(
             0.05 <= self.holdout_fraction <= 0.5,
             f"diagnosis.holdout_fraction must lie in [0.05, 0.5], got {self.holdout_fraction}",
         )

@@ -145,12 +145,18 @@ def prepare_trials(
     fs = next(iter(rates.values()))
     if any(abs(f - fs) > 1e-6 * fs for f in rates.values()):
         raise DataError(f"trials have different sample rates {rates}; resample them to one rate first")
+    if fs_fit_hz > fs * (1 + 1e-6):  # decimation can only lower the rate
+        raise DataError(
+            f"diagnosis.fs_fit_hz={fs_fit_hz:g} Hz is above the data's sample rate {fs:g} Hz; valid: "
+            f"<= {fs:g} Hz (the models are fitted at an integer decimation of the data)"
+        )
     q = max(1, int(round(fs / fs_fit_hz)))
     fs_fit = fs / q
     if band_hz >= 0.45 * fs_fit:
         raise DataError(
-            f"band {band_hz} Hz needs a fitting rate above {band_hz / 0.45:.0f} Hz; "
-            f"the data give {fs_fit:g} Hz"
+            f"diagnosis.band_hz={band_hz:g} Hz needs a fitting rate above {band_hz / 0.45:.0f} Hz; the data "
+            f"({fs:g} Hz) with diagnosis.fs_fit_hz={fs_fit_hz:g} give {fs_fit:g} Hz; valid: band_hz < "
+            f"{0.45 * fs_fit:.3g} Hz, or a higher fs_fit_hz (up to the data's rate)"
         )
     out = []
     for r in records:
