@@ -119,6 +119,18 @@ def files(tmp_path_factory) -> dict[str, Path]:
         replace(trials, onset_index=np.array([300, 300]), attrs={"protocol": "conditioning_window"}),
     )
     f["cond_run"] = cond
+    for name, units, scale in (("mm_run", "m", 1000.0), ("unit_run", "mm", 1.0)):
+        folder = d / name  # hand positions of a conditioning trial file in mm, or labelled so
+        folder.mkdir()
+        pos = 0.4 + 0.01 * np.random.default_rng(1).standard_normal((2, 500, 2))
+        hand = replace(
+            trials,
+            channels={"hand_pos": pos * scale, "hand_force": np.ones((2, 500, 2))},
+            units={"hand_pos": units, "hand_force": "N"},
+            attrs={"protocol": "conditioning_window", "arm_l1_m": 0.3, "arm_l2_m": 0.35},
+        )
+        write_trials(folder / "trials.h5", hand)
+        f[name] = folder
     other = d / "other_run"
     other.mkdir()
     write_trials(other / "trials.h5", replace(trials, attrs={"protocol": "nope"}))
@@ -299,6 +311,16 @@ OTHER = [
         "diagnose-damaged-h5",
         ["diagnose", "data={bad_run}", "protocol=conditioning_window"],
         ["trials.h5: cannot be read", "damaged"],
+    ),
+    (
+        "diagnose-h5-in-mm",
+        ["diagnose", "data={mm_run}", "protocol=conditioning_window"],
+        ["'hand_pos' reaches", "<= 1 m", "looks like mm"],
+    ),
+    (
+        "diagnose-h5-unit",
+        ["diagnose", "data={unit_run}", "protocol=conditioning_window"],
+        ["'hand_pos' is in 'mm'", "'m'"],
     ),
     (
         "diagnose-units-for-h5",

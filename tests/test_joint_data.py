@@ -183,11 +183,6 @@ def test_first_and_last_samples_are_band_limited_too():
             "diagnosis.band_hz=40 Hz needs a fitting rate above 89 Hz; the data (1000 Hz) with "
             "diagnosis.fs_fit_hz=80 give 83.3333 Hz",
         ),
-        (
-            [JointTrial("a", np.zeros(8000), np.zeros(8000))],
-            {"fs_fit_hz": 2000.0},  # decimation cannot raise the rate: refused, not fitted at 1 kHz
-            "diagnosis.fs_fit_hz=2000 Hz is above the data's sample rate 1000 Hz; valid: <= 1000 Hz",
-        ),
     ],
 )
 def test_bad_trials_are_refused_with_the_reason(records, kw, message):

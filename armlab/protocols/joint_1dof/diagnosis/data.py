@@ -145,11 +145,6 @@ def prepare_trials(
     fs = next(iter(rates.values()))
     if any(abs(f - fs) > 1e-6 * fs for f in rates.values()):
         raise DataError(f"trials have different sample rates {rates}; resample them to one rate first")
-    if fs_fit_hz > fs * (1 + 1e-6):  # decimation can only lower the rate
-        raise DataError(
-            f"diagnosis.fs_fit_hz={fs_fit_hz:g} Hz is above the data's sample rate {fs:g} Hz; valid: "
-            f"<= {fs:g} Hz (the models are fitted at an integer decimation of the data)"
-        )
     q = max(1, int(round(fs / fs_fit_hz)))
     fs_fit = fs / q
     if band_hz >= 0.45 * fs_fit:
