@@ -121,9 +121,6 @@ def _run(args: list[str]) -> int:
     from armlab.config.store import CONFIG_DIR
     from armlab.protocols.compose import check_effects, split_protocol
 
-    if any(a in ("-h", "--help", "help") for a in args):
-        print(_usage())
-        return 0
     multirun = "--multirun" in args or "-m" in args
     overrides = [a for a in args if a not in ("--multirun", "-m")]
     bad = [a for a in overrides if a.startswith("-")]
@@ -333,8 +330,8 @@ def main(argv: list[str] | None = None) -> int:
 
 def _main(argv: list[str] | None = None) -> int:
     args = sys.argv[1:] if argv is None else list(argv)
-    if not args or args[0] in ("-h", "--help", "help"):
-        print(_usage())
+    if not args or args[0] in ("-h", "--help", "help") or any(a in ("-h", "--help") for a in args[1:]):
+        print(_usage())  # also `armlab <verb> --help`
         return 0
     verb, rest = args[0], args[1:]
     handlers = {

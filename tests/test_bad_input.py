@@ -532,3 +532,12 @@ def test_the_entry_point_prints_one_line(argv, words, files, tmp_path):
     lines = proc.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("armlab: error:") and all(w in lines[0] for w in words)
     assert not (tmp_path / "r").exists()
+
+
+@pytest.mark.parametrize(
+    "verb", ["run", "estimate", "view", "diagnose", "effects", "diagnose-benchmark", "fit-joint"]
+)
+def test_help_of_every_verb_prints_the_usage(verb, capsys, tmp_path):
+    assert main([verb, "--help"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("usage: armlab <verb> [args]") and "units=" in out
