@@ -390,6 +390,16 @@ OTHER = [
         ["diagnosis.bic_margin=inf is not a finite number"],
     ),
     ("effects-empty-protocol", ["effects", "protocol="], ["no effects for protocol ''", "valid protocols"]),
+    (
+        "benchmark-rate-too-low",
+        ["diagnose-benchmark", "referee.fs_hz=100", "referee.classes=[none]", "referee.replicates=1"],
+        ["referee.fs_hz=100", "force_sensor_bandwidth", ">= 220 Hz"],
+    ),
+    (
+        "benchmark-band-too-high",
+        ["diagnose-benchmark", "diagnosis.band_hz=120", "diagnosis.highpass_hz=0.3"],
+        ["referee.fs_hz=1000", "diagnosis.band_hz=120", "267 Hz"],
+    ),
     ("benchmark-no-jobs", ["diagnose-benchmark", "referee.jobs=0"], ["referee.jobs must be", "-1"]),
     ("benchmark-bad-jobs", ["diagnose-benchmark", "referee.jobs=abc"], ["referee.jobs=abc", "Integer"]),
     (

@@ -76,12 +76,15 @@ class Referee:
         settings: the protocol-specific ``RefereeConfig`` fields it reads (beside the shared
             ``protocol``, ``replicates``, ``seed``, ``classes``, ``jobs``); an override of another
             protocol's field is refused, never ignored.
+        validate: ``(RefereeConfig, DiagnosisConfig) -> None``: refuses (ConfigError) settings
+            whose datasets its diagnosis would refuse, before any dataset is simulated.
     """
 
     classes: Mapping[str, tuple[tuple[str, ...], tuple[str, ...]]]
     make_dataset: Callable[[str, int, RefereeConfig, DiagnosisConfig, Path], Any]
     describe: Callable[[RefereeConfig], str]
     settings: tuple[str, ...] = ()
+    validate: Callable[[RefereeConfig, DiagnosisConfig], None] | None = None
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)

@@ -160,6 +160,8 @@ def run_benchmark(overrides: list[str] | None, out_dir: Path) -> tuple[Path, dic
     unknown = [c for c in classes if c not in all_classes]
     if unknown:
         raise ConfigError(f"unknown referee classes {unknown} for {ref.protocol}; valid: {list(all_classes)}")
+    if referee.validate is not None:  # settings its diagnosis would refuse: before any dataset
+        referee.validate(ref, diag_cfg)
     check_new_dir(out_dir)
     out = new_dir(out_dir)
     t0 = time.perf_counter()

@@ -7,7 +7,7 @@ rules (:mod:`.rules`); :data:`HOOKS` is what the protocol declares.
 
 from armlab.data.joint_import import load_joint_data
 from armlab.protocols.base import DiagnosisHooks, Referee
-from armlab.protocols.joint_1dof.diagnosis.diagnose import diagnose_joint
+from armlab.protocols.joint_1dof.diagnosis.diagnose import check_referee, diagnose_joint
 from armlab.protocols.joint_1dof.diagnosis.models import JOINT_SURROGATES
 from armlab.protocols.joint_1dof.diagnosis.referee import JOINT_CLASSES, describe, make_dataset
 from armlab.protocols.joint_1dof.diagnosis.report import format_report
@@ -28,5 +28,6 @@ HOOKS = DiagnosisHooks(
         make_dataset=make_dataset,
         describe=describe,
         settings=("n_trials", "trial_s", "fs_hz", "noise_std_Nm"),
+        validate=check_referee,
     ),
 )

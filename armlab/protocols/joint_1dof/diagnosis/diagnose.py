@@ -16,13 +16,14 @@ from armlab.diagnosis.attribution import held_out_gap, select_candidates, select
 from armlab.diagnosis.families import FittedModel
 from armlab.diagnosis.localise import band_breakdown, frf_parameters, residual_tests, window_breakdown
 from armlab.dsp import zero_phase
-from armlab.errors import DataError
+from armlab.errors import ConfigError, DataError
 from armlab.protocols.joint_1dof.diagnosis.data import highpass_sos, noise_floor, prepare_trials
 from armlab.protocols.joint_1dof.diagnosis.models import JOINT_FAMILY, JOINT_SURROGATES
 from armlab.protocols.joint_1dof.diagnosis.rules import RULES
 
 __all__ = [
     "candidate_names",
+    "check_referee",
     "prepare_scoring",
     "diagnose_joint",
 ]
@@ -81,6 +82,23 @@ def prepare_scoring(records, cfg: DiagnosisConfig, **kw):
     )
     hp = highpass_sos(trials[0].fs_hz, cfg.highpass_hz)
     return trials, hp, [zero_phase(hp, tr.y) for tr in trials]
+
+
+def check_referee(ref, cfg: DiagnosisConfig) -> None:
+    """ConfigError if datasets recorded at ``referee.fs_hz`` could not be diagnosed with ``cfg``
+    (the checks :func:`prepare_trials` and the candidates' rates apply to the data), before the
+    referee simulates any."""
+    fs = float(ref.fs_hz)
+    fs_fit = fs / max(1, int(round(fs / cfg.fs_fit_hz)))
+    try:
+        if cfg.band_hz >= 0.45 * fs_fit:
+            raise DataError(
+                f"diagnosis.band_hz={cfg.band_hz:g} Hz needs a fitting rate above "
+                f"{cfg.band_hz / 0.45:.0f} Hz; the datasets give {fs_fit:g} Hz"
+            )
+        _check_rate(candidate_names(cfg), fs_fit, fs)
+    except DataError as exc:
+        raise ConfigError(f"referee.fs_hz={fs:g}: {exc}") from None
 
 
 def _check_rate(names: list[str], fs_fit: float, fs_raw: float) -> None:
