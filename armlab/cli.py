@@ -14,11 +14,13 @@ Bad input is reported on one line (``armlab: error: ...``, exit status 2), never
 
 from __future__ import annotations
 
+import os
 import subprocess
 import sys
+import warnings
 from pathlib import Path
 
-from armlab.errors import ArmlabError, ConfigError
+from armlab.errors import ArmlabError, ArmlabWarning, ConfigError
 
 __all__ = ["main"]
 
@@ -44,7 +46,10 @@ def _usage() -> str:
         "                                                  run only a sweep's missing/incomplete jobs",
         "  estimate <run_dir> [<group>.<field>=<value>]    re-run estimation on a run's trials.h5",
         "  view <run_dir>                                  open the run's rerun recording (trials.rrd)",
-        "  diagnose data=<file|folder> protocol=<name> [diagnosis.<field>=<value>] [out=<dir>]",
+        "  diagnose data=<file|folder> protocol=<name> [diagnosis.<field>=<value>] [units=<u>] [out=<dir>]",
+        "                                                  units= of joint CSV/.mat data when not rad and",
+        "                                                  N·m: deg, Nmm or deg,Nmm (rad,Nm states SI; data",
+        "                                                  outside human ranges are refused without it)",
         "  diagnose data=published protocol=<name> [out=<dir>]",
         "                                                  where the sim-to-real gap lies, which effect",
         "                                                  explains it, how far it shrinks",
@@ -108,6 +113,24 @@ def _hydra_task(cfg, resume: bool) -> None:
     print(f"outputs: {out_dir}")
 
 
+def _sweep_values(overrides: list[str]) -> list[list[str]]:
+    """Per override, the ``key=value`` items of its sweep as Hydra reads it (``seed=0,1``,
+    ``k=[1],[2]``, ``x=range(1,3)``); one item for a plain override."""
+    from hydra.core.override_parser.overrides_parser import OverridesParser
+    from hydra.errors import HydraException
+
+    out = []
+    for item in overrides:
+        try:
+            (parsed,) = OverridesParser.create().parse_overrides([item])
+        except HydraException as exc:
+            raise ConfigError(f"{item}: {' '.join(str(exc).split())}") from None
+        key = item.partition("=")[0]
+        values = list(parsed.sweep_string_iterator()) if parsed.is_sweep_override() else None
+        out.append([f"{key}={v}" for v in values] if values else [item])
+    return out
+
+
 def _run(args: list[str]) -> int:
     import os
 
@@ -137,8 +160,12 @@ def _run(args: list[str]) -> int:
         return 0
     # validate everything up front (one-line errors, nothing written); of a sweep (a,b,c) its first
     # value (lists [a,b] are values, not sweeps)
-    first = [o if o.partition("=")[2].startswith(("[", "{")) else o.split(",")[0] for o in overrides]
-    _, exp = compose(overrides if not multirun else first)
+    sweeps = _sweep_values(overrides) if multirun else [[o] for o in overrides]
+    first = [values[0] for values in sweeps]
+    _, exp = compose(first)
+    for i, values in enumerate(sweeps):  # each value of each sweep, the others at their first value
+        for item in values[1:]:
+            compose(first[:i] + [item] + first[i + 1 :])
     protocol, overrides = split_protocol(overrides)
     check_effects(protocol, exp)
 
@@ -155,6 +182,16 @@ def _run(args: list[str]) -> int:
                 _hydra_task(cfg, resume)
         except ArmlabError as exc:
             print(f"armlab: error: {exc}", file=sys.stderr)
+            raise SystemExit(2) from None
+        except Exception as exc:  # noqa: BLE001 - Hydra would print a traceback hint instead
+            if os.environ.get("ARMLAB_DEBUG"):
+                raise
+            msg = " ".join(str(exc).split())
+            print(
+                f"armlab: error: internal error: {type(exc).__name__}: {msg} (please report it; rerun "
+                "with ARMLAB_DEBUG=1 for the traceback)",
+                file=sys.stderr,
+            )
             raise SystemExit(2) from None
 
     wrapped = hydra.main(config_path=str(CONFIG_DIR), config_name=protocol.name, version_base="1.3")(task)
@@ -243,15 +280,19 @@ def _diagnose(args: list[str]) -> int:
     from armlab.protocols import registry
     from armlab.runner.diagnose import default_diagnosis_dir, run_diagnosis
 
-    named, rest = _keyed(args, ("data", "protocol", "out"), ("diagnosis",))
+    named, rest = _keyed(args, ("data", "protocol", "out", "units"), ("diagnosis",))
     missing = [k for k in ("data", "protocol") if not named.get(k)]
     if missing:
         return _fail(f"diagnose needs {missing}: armlab diagnose data=<file|folder> protocol=<name>")
     out = Path(named["out"]) if named.get("out") else default_diagnosis_dir()
     if named["data"] == "published":  # the source paper's published figures as the measurement
+        if named.get("units"):
+            return _fail("data=published takes no units= (the published figures carry theirs)")
         return _diagnose_published(named["protocol"], rest, out)
     registry.get(named["protocol"], need="diagnose")
-    out, results = run_diagnosis(Path(named["data"]), named["protocol"], rest, out)
+    out, results = run_diagnosis(
+        Path(named["data"]), named["protocol"], rest, out, units=named.get("units") or None
+    )
     print(format_summary(results))
     print(f"outputs: {out}")
     return 0
@@ -318,9 +359,45 @@ def _benchmark(args: list[str]) -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """The ``armlab`` command; returns the exit status (2 on bad input, with one ``armlab: error:``
+    line). An exception no check foresaw is reported as an internal error on one line as well (the
+    traceback with ``ARMLAB_DEBUG=1``): a safety net, not a way of handling bad input."""
+    shown: set[str] = set()
+    python_show = warnings.showwarning
+
+    def show(message, category, filename, lineno, file=None, line=None) -> None:
+        """armlab's warnings on one line (``armlab: warning: ...``), each once per command (a sweep
+        checks every value); others as Python prints them."""
+        if not issubclass(category, ArmlabWarning):
+            python_show(message, category, filename, lineno, file, line)
+        elif str(message) not in shown:
+            shown.add(str(message))
+            print(f"armlab: warning: {message}", file=sys.stderr)
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("always", ArmlabWarning)
+        warnings.showwarning = show
+        try:
+            return _main(argv)
+        except ArmlabError as exc:
+            return _fail(str(exc))
+        except KeyboardInterrupt:
+            print("armlab: interrupted", file=sys.stderr)
+            return 130
+        except Exception as exc:  # noqa: BLE001 - the last-resort guard of the command line
+            if os.environ.get("ARMLAB_DEBUG"):
+                raise
+            msg = " ".join(str(exc).split()) or "(no message)"
+            return _fail(
+                f"internal error: {type(exc).__name__}: {msg} (please report it; rerun with ARMLAB_DEBUG=1 "
+                "for the traceback)"
+            )
+
+
+def _main(argv: list[str] | None = None) -> int:
     args = sys.argv[1:] if argv is None else list(argv)
-    if not args or args[0] in ("-h", "--help", "help"):
-        print(_usage())
+    if not args or args[0] in ("-h", "--help", "help") or any(a in ("-h", "--help") for a in args[1:]):
+        print(_usage())  # also `armlab <verb> --help`
         return 0
     verb, rest = args[0], args[1:]
     handlers = {

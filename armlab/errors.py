@@ -8,6 +8,7 @@ from __future__ import annotations
 
 __all__ = [
     "ArmlabError",
+    "ArmlabWarning",
     "ConfigError",
     "DataError",
     "ModelError",
@@ -38,3 +39,8 @@ class EstimationError(ArmlabError, ValueError):
 
 class SimulationError(ArmlabError, RuntimeError):
     """A simulated trial failed (safety range hit, instability); the message says when and why."""
+
+
+class ArmlabWarning(UserWarning):
+    """A setting that runs but cannot do what it is set for (e.g. a reflex latency longer than
+    every observation window); the CLI prints it once, as ``armlab: warning: ...``."""

@@ -88,7 +88,8 @@ def trial_folder(tmp_path):
         (["data"], "argument 'data' must look like key=value"),
         (
             ["bogus=1"],
-            "unknown argument 'bogus=1'; valid: ['data=', 'protocol=', 'out=', 'diagnosis.<field>=']",
+            "unknown argument 'bogus=1'; valid: ['data=', 'protocol=', 'out=', 'units=', "
+            "'diagnosis.<field>=']",
         ),
         (["estimator.x=1"], "unknown argument 'estimator.x=1'"),
         (

@@ -121,7 +121,11 @@ def test_compose_without_effects_leaves_all_off():
             ["effects=[reflex]", "effects.reflex.delay_s=-0.01"],
             "effects.reflex.delay_s must be finite and >= 0, got -0.01",
         ),
-        (["effects=[reflex]", "effects.reflex.nope=1"], "Could not override 'effects.reflex.nope'"),
+        (
+            ["effects=[reflex]", "effects.reflex.nope=1"],
+            "effects.reflex.nope=1: effect 'reflex' has no key 'nope'; its keys: "
+            "['delay_s', 'gain_Nms_per_rad'",
+        ),
     ],
 )
 def test_compose_errors_name_the_problem(overrides, message):

@@ -180,7 +180,8 @@ def test_first_and_last_samples_are_band_limited_too():
         (
             [JointTrial("a", np.zeros(8000), np.zeros(8000))],
             {"fs_fit_hz": 80.0},  # q = round(12.5) = 12: 83.3 Hz, Nyquist margin needs 40/0.45 = 89 Hz
-            "band 40.0 Hz needs a fitting rate above 89 Hz; the data give 83.3333 Hz",
+            "diagnosis.band_hz=40 Hz needs a fitting rate above 89 Hz; the data (1000 Hz) with "
+            "diagnosis.fs_fit_hz=80 give 83.3333 Hz",
         ),
     ],
 )

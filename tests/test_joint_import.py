@@ -142,9 +142,9 @@ def test_csv_column_order_is_free_and_extra_columns_are_ignored(tmp_path):
 
 
 def test_time_varying_layout(tmp_path):
-    rows = [f"{r},{0.1 * i:.3f}" for i, r in enumerate(_good_rows())]
+    rows = [f"{r},{0.01 * i:.3f}" for i, r in enumerate(_good_rows())]  # a slow ramp, < pi rad
     (rec,) = load_joint_data(_csv(tmp_path / "tv.csv", ",".join(armlab.data.TIME_VARYING_COLUMNS), rows))
-    assert rec.operating_point is not None and rec.operating_point[1] == pytest.approx(0.1)
+    assert rec.operating_point is not None and rec.operating_point[1] == pytest.approx(0.01)
     _csv(tmp_path / "tv2.csv", "t_s,position_perturbation_rad,torque_Nm", _good_rows())
     with pytest.raises(
         DataError, match=r"missing column\(s\) \['torque_perturbation_Nm', 'ankle_position_rad'\]"

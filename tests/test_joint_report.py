@@ -69,7 +69,9 @@ def test_single_file_and_bad_input(folder, tmp_path, capsys):
         fit_joint_recordings(folder / "a.csv", joint_frf_config(), tmp_path / "afile", viz=viz)
     assert (tmp_path / "afile").read_text() == "keep me"
     assert joint_frf_config(["frf.band_hz=[1,20]"]).band_hz[1] == 20.0
-    with pytest.raises(DataError, match="neither a folder"):
+    with pytest.raises(
+        DataError, match="missing.csv does not exist; expected a .csv or .mat file or a folder"
+    ):
         fit_joint_recordings(folder / "missing.csv", joint_frf_config(), tmp_path / "x", viz=viz)
     with pytest.raises(ConfigError, match="unknown frf field 'nope'"):
         joint_frf_config(["frf.nope=1"])

@@ -72,7 +72,8 @@ def _write(path: Path, header: str, rows: np.ndarray) -> None:
 
 def test_importer_errors(tmp_path):
     t = np.arange(100) * 1e-3
-    _write(tmp_path / "ok.csv", "t_s,position_rad,torque_Nm", np.column_stack([t, t, t]))
+    # torque 100 N·m per rad of angle: within human joints' scale (armlab.data.joint_units)
+    _write(tmp_path / "ok.csv", "t_s,position_rad,torque_Nm", np.column_stack([t, t, 100 * t]))
     assert load_ankle_trial("ok", tmp_path).fs_hz == pytest.approx(1000.0)
     with pytest.raises(DataError, match=r"no ankle trial 'z_xx'.*available: \['ok'\]"):
         load_ankle_trial("z_xx", tmp_path)

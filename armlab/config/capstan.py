@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, get_args
 
 from armlab.config import choices
-from armlab.config.validate import check, choice, options
+from armlab.config.validate import check, check_tuple_lengths, choice, options
 
 __all__ = [
     "CABLE_MODES",
@@ -109,6 +109,7 @@ class CapstanConfig:
     id_ee_mass_kg: float = 0.195
 
     def __post_init__(self) -> None:
+        check_tuple_lengths(self, "capstan")
         models = options(choices.CapstanModel)
         check(self.model in models, f"capstan.model={self.model!r}; valid: {list(models)}")
         choice("capstan.cable", self.cable, choices.CableMode)
@@ -175,6 +176,7 @@ class VfsConfig:
     arm_reach_m: float = 0.5
 
     def __post_init__(self) -> None:
+        check_tuple_lengths(self, "vfs")
         bad_k = [s for s in self.stiffness if s not in STIFFNESS_LABELS]
         check(not bad_k, f"vfs.stiffness has unknown labels {bad_k}; valid: {list(STIFFNESS_LABELS)}")
         bad_m = [p for p in self.payloads if p not in PAYLOAD_LABELS]

@@ -49,6 +49,11 @@ class DiagnosisConfig:
             f"diagnosis.highpass_hz must lie in (0, band_hz={self.band_hz}), got {self.highpass_hz}",
         )
         check(
+            0 < self.slow_hz < self.band_hz,
+            f"diagnosis.slow_hz (the tonic torque's cut-off) must lie in (0, band_hz={self.band_hz}), "
+            f"got {self.slow_hz}",
+        )
+        check(
             0.05 <= self.holdout_fraction <= 0.5,
             f"diagnosis.holdout_fraction must lie in [0.05, 0.5], got {self.holdout_fraction}",
         )
@@ -102,7 +107,16 @@ class RefereeConfig:
     jobs: int = 2  # datasets diagnosed in parallel (joblib)
 
     def __post_init__(self) -> None:
-        check(self.replicates >= 1 and self.n_trials >= 2, "referee.replicates >= 1 and n_trials >= 2")
+        check(
+            self.replicates >= 1 and self.n_trials >= 2,
+            f"referee.replicates >= 1 and n_trials >= 2 are needed, got replicates={self.replicates}, "
+            f"n_trials={self.n_trials}",
+        )
+        check(self.seed >= 0, f"referee.seed must be a non-negative integer, got {self.seed}")
+        check(self.trial_s > 0, f"referee.trial_s must be > 0 s, got {self.trial_s}")
+        check(self.fs_hz > 0, f"referee.fs_hz must be > 0 Hz, got {self.fs_hz}")
+        # joblib's n_jobs: a positive number of workers, or -1, -2, ... for all cores, all but one, ...
+        check(self.jobs != 0, "referee.jobs must be a positive number of workers or -1 (all cores), got 0")
         check(self.noise_std_Nm > 0, "referee.noise_std_Nm must be > 0")
         check(self.force_noise_N > 0, "referee.force_noise_N must be > 0")
         check(self.cond_trials >= 6, "referee.cond_trials must be >= 6 (one per perturbation direction)")

@@ -18,7 +18,7 @@ from armlab.config import choices
 from armlab.config.capstan import CapstanConfig, VfsConfig
 from armlab.config.effects import EffectsConfig
 from armlab.config.integration import TIMESTEP_MAX_S, TIMESTEP_MIN_S
-from armlab.config.validate import check, choice
+from armlab.config.validate import check, check_tuple_lengths, choice
 from armlab.errors import ConfigError
 
 __all__ = [
@@ -249,6 +249,11 @@ class EstimatorConfig:
                 f"{self.constancy_tol_per_s}",
             )
         if self.t_obs_s is not None:
+            check(
+                len(self.t_obs_s) > 0,
+                "estimator.t_obs_s is empty; give observation windows in s (e.g. [0.3,0.4]) or null for "
+                "the scenario's T_k + 70 ms",
+            )
             bad = [t for t in self.t_obs_s if not (math.isfinite(t) and t > 0)]
             check(not bad, f"estimator.t_obs_s must hold positive times in s, got {bad}")
 
@@ -284,6 +289,7 @@ class ElbowConfig:
     oustaloup_order: int = 6  # pole-zero pairs per side, 2N + 1 in all
 
     def __post_init__(self) -> None:
+        check_tuple_lengths(self, "elbow")
         choice("elbow.model", self.model, choices.ElbowModel)
         choice("elbow.impedance", self.impedance, choices.ElbowImpedance)
         check(
@@ -386,6 +392,7 @@ class FrfConfig:
     filter_force: bool = False
 
     def __post_init__(self) -> None:
+        check_tuple_lengths(self, "frf")
         check(
             0 < self.fir_pass_hz < self.fir_stop_hz,
             "frf.fir_pass_hz must be > 0 and below frf.fir_stop_hz, "
@@ -409,7 +416,8 @@ class FrfConfig:
         lo, hi = self.band_hz
         check(
             hi < fs_hz / 2,
-            f"frf.band_hz upper edge {hi} Hz is at or beyond Nyquist ({fs_hz / 2} Hz); valid: < {fs_hz / 2}",
+            f"frf.band_hz upper edge {hi:g} Hz is at or beyond Nyquist ({fs_hz / 2:.6g} Hz); "
+            f"valid: < {fs_hz / 2:.6g}",
         )
         check(
             self.welch_window <= n_samples,
@@ -444,4 +452,5 @@ class ExperimentConfig:
     effects: EffectsConfig = field(default_factory=EffectsConfig)  # the catalogue, all off by default
 
     def __post_init__(self) -> None:
-        check(self.seed >= 0, f"seed must be a non-negative integer, got {self.seed}")
+        # trials.h5 stores the seed as a 64-bit integer attribute
+        check(0 <= self.seed < 2**63, f"seed must be an integer in [0, 2**63), got {self.seed}")

@@ -8,6 +8,7 @@ from hydra.core.config_store import ConfigStore
 from omegaconf import DictConfig, OmegaConf
 
 from armlab.config.schema import ExperimentConfig
+from armlab.config.validate import check_finite
 from armlab.errors import ConfigError
 
 __all__ = [
@@ -76,11 +77,13 @@ def apply_overrides(base, prefix: str, overrides: list[str] | None = None):
         except Exception as exc:  # OmegaConf type errors: keep their first line, name the field
             raise ConfigError(f"{item}: {str(exc).strip().splitlines()[0]}") from None
     try:
-        return OmegaConf.to_object(cfg)
+        obj = OmegaConf.to_object(cfg)
     except ConfigError:
         raise
     except Exception as exc:
         raise ConfigError(str(exc).strip().splitlines()[0]) from None
+    check_finite(obj, prefix)
+    return obj
 
 
 def stored_group(schema, stored: DictConfig, name: str):

@@ -15,6 +15,11 @@ from armlab.data.joint_import import (
     write_joint_csv,
 )
 from armlab.data.joint_record import JointRecord
+from armlab.data.joint_units import (
+    JointUnits,
+    apply_units,
+    parse_units,
+)
 from armlab.data.reklab import (
     DEFAULT_REKLAB_ROOT,
     AnkleTrial,
@@ -38,6 +43,9 @@ __all__ = [
     "TIME_VARYING_COLUMNS",
     "SUPPORTED_SUFFIXES",
     "JointRecord",
+    "JointUnits",
+    "apply_units",
+    "parse_units",
     "load_joint_data",
     "write_joint_csv",
     "atomic_path",

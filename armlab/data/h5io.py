@@ -225,6 +225,9 @@ def write_trials(path: str | os.PathLike[str], trials: TrialSet, overwrite: bool
 def read_trials(path: str | os.PathLike[str]) -> TrialSet:
     """Read and validate a trial file written by :func:`write_trials` (or a real-lab importer).
 
+    A damaged file (h5py's OSError on a corrupted block, a read refused by the system) is a
+    :class:`DataError` naming it, like every other defect listed below.
+
     Args:
         path: the ``.h5`` file.
 
@@ -236,7 +239,16 @@ def read_trials(path: str | os.PathLike[str]) -> TrialSet:
         DataError: the file is missing or not HDF5; the format marker or version is wrong; a
             required group, dataset or unit is missing; shapes disagree; a channel has NaN/inf.
     """
-    path = Path(path)
+    try:
+        return _read_trials(Path(path))
+    except OSError as e:  # h5py: a corrupted block ("Can't synchronously read data", checksum, ...)
+        msg = " ".join(str(e).split())
+        raise DataError(
+            f"{path}: cannot be read, the file is damaged or unreadable ({msg}); restore it or run again"
+        ) from None
+
+
+def _read_trials(path: Path) -> TrialSet:
     if not path.is_file():
         raise DataError(f"{path}: no such file")
     try:

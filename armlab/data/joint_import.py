@@ -25,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from armlab.data.joint_record import _RATE_RTOL, JointRecord, _check_samples
+from armlab.data.joint_units import JointUnits, apply_units, parse_units
 from armlab.errors import DataError
 
 __all__ = [
@@ -67,6 +68,12 @@ def _csv_layout(path: Path, header: list[str]) -> tuple[str, ...]:
         (TIME_VARYING_COLUMNS, JOINT_COLUMNS) if time_varying else (JOINT_COLUMNS, TIME_VARYING_COLUMNS)
     )
     missing = [c for c in expected if c not in header]
+    other_sep = [sep for sep in (";", "\t", "|") if any(sep in h for h in header)]
+    if missing and other_sep:
+        raise DataError(
+            f"{path.name}: the header {header} looks {other_sep[0]!r}-separated; armlab reads "
+            f"comma-separated CSV with the columns {list(expected)} (or {list(other)})"
+        )
     if missing:
         raise DataError(
             f"{path.name}: missing column(s) {missing}; expected {list(expected)} (the other layout: "
@@ -135,25 +142,38 @@ def _read_csv(path: Path) -> JointRecord:
 # --- public entry points --------------------------------------------------------------------------
 def _read_file(path: Path) -> list[JointRecord]:
     suffix = path.suffix.lower()
-    if suffix == ".csv":
-        return [_read_csv(path)]
-    if suffix == ".mat":
-        from armlab.data.mat_import import read_mat  # matio is imported only for .mat files
+    try:
+        if suffix == ".csv":
+            return [_read_csv(path)]
+        if suffix == ".mat":
+            from armlab.data.mat_import import read_mat  # matio is imported only for .mat files
 
-        return read_mat(path)
+            return read_mat(path)
+    except UnicodeDecodeError as exc:
+        raise DataError(
+            f"{path}: is not a text CSV (byte {exc.start} is not UTF-8: a binary file?); expected comma-"
+            f"separated text with the header {','.join(JOINT_COLUMNS)}"
+        ) from None
+    except OSError as exc:
+        raise DataError(f"{path}: cannot be read ({exc.strerror or exc}); check its permissions") from None
     raise DataError(
         f"{path.name}: unsupported file type {path.suffix or '(no extension)'!r}; supported: "
         f"{list(SUPPORTED_SUFFIXES)} or a folder holding such files"
     )
 
 
-def load_joint_data(path: Path | str, *, min_duration_s: float = 0.0) -> tuple[JointRecord, ...]:
+def load_joint_data(
+    path: Path | str, *, min_duration_s: float = 0.0, units: str | JointUnits | None = None
+) -> tuple[JointRecord, ...]:
     """Read joint-perturbation trials from one file or a folder (format in docs/data_import.md).
 
     Args:
         path: a ``.csv`` file (one trial), a ``.mat`` file (one trial per mapped variable), or a
             folder: every ``*.csv`` and ``*.mat`` in it, by file name, not recursive.
         min_duration_s: s, refuse any trial shorter than this (``n_samples / fs_hz``).
+        units: the units of the angle and torque columns when they are not SI (``"deg"``,
+            ``"Nmm"``, ``"deg,Nmm"``; ``"rad,Nm"`` states SI); unstated channels are read as rad
+            and N·m and checked against human ranges (:mod:`armlab.data.joint_units`).
 
     Returns:
         The trials, in file-name order and, within a ``.mat``, variable-name order.
@@ -163,9 +183,12 @@ def load_joint_data(path: Path | str, *, min_duration_s: float = 0.0) -> tuple[J
             supported file, has files of different sample rates or two trials of one name; a
             file's columns or variables are missing or unmappable, its cells non-numeric or
             non-finite, its time not strictly increasing or not uniformly sampled; a trial is
-            shorter than ``min_duration_s``.
+            shorter than ``min_duration_s``; a file that is not text or cannot be read; an
+            unstated unit outside human ranges (the message names the likely unit); an unknown
+            unit.
     """
     path = Path(path)
+    stated = units if isinstance(units, JointUnits) else parse_units(units)
     if not (math.isfinite(min_duration_s) and min_duration_s >= 0):
         raise DataError(f"min_duration_s must be a finite number of seconds >= 0, got {min_duration_s}")
     if not path.exists():
@@ -184,17 +207,11 @@ def load_joint_data(path: Path | str, *, min_duration_s: float = 0.0) -> tuple[J
             )
     else:
         files = [path]
-    records = [r for f in files for r in _read_file(f)]
+    records = [apply_units(r, stated) for f in files for r in _read_file(f)]
     names = [r.name for r in records]
     dup = sorted({n for n in names if names.count(n) > 1})
     if dup:
         raise DataError(f"{path}: several trials named {dup}; rename the files so each trial name is unique")
-    for r in records:
-        if r.duration_s < min_duration_s:
-            raise DataError(
-                f"{r.path.name}: trial {r.name!r} lasts {r.duration_s:.9g} s, shorter than "
-                f"min_duration_s = {min_duration_s:.9g} s"
-            )
     ref = records[0].fs_hz
     if path.is_dir() and any(abs(r.fs_hz - ref) > _RATE_RTOL * ref for r in records):
         rates = ", ".join(f"{r.name}: {r.fs_hz:.9g} Hz" for r in records)
@@ -202,6 +219,12 @@ def load_joint_data(path: Path | str, *, min_duration_s: float = 0.0) -> tuple[J
             f"{path}: the files have different sample rates ({rates}); one folder must hold one rate "
             f"(resample, or load the files separately)"
         )
+    for r in records:
+        if r.duration_s < min_duration_s:
+            raise DataError(
+                f"{r.path.name}: trial {r.name!r} lasts {r.duration_s:.9g} s, shorter than "
+                f"min_duration_s = {min_duration_s:.9g} s"
+            )
     return tuple(records)
 
 

@@ -76,12 +76,15 @@ class Referee:
         settings: the protocol-specific ``RefereeConfig`` fields it reads (beside the shared
             ``protocol``, ``replicates``, ``seed``, ``classes``, ``jobs``); an override of another
             protocol's field is refused, never ignored.
+        validate: ``(RefereeConfig, DiagnosisConfig) -> None``: refuses (ConfigError) settings
+            whose datasets its diagnosis would refuse, before any dataset is simulated.
     """
 
     classes: Mapping[str, tuple[tuple[str, ...], tuple[str, ...]]]
     make_dataset: Callable[[str, int, RefereeConfig, DiagnosisConfig, Path], Any]
     describe: Callable[[RefereeConfig], str]
     settings: tuple[str, ...] = ()
+    validate: Callable[[RefereeConfig, DiagnosisConfig], None] | None = None
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -89,7 +92,9 @@ class DiagnosisHooks:
     """How ``armlab diagnose`` works for a protocol.
 
     Attributes:
-        load: ``(path, DiagnosisConfig) -> data``: read measured trials (a file or a folder),
+        load: ``(path, DiagnosisConfig) -> data``: read measured trials (a file or a folder);
+            a loader that also takes ``units=`` (the ``units=`` of ``armlab diagnose``, e.g.
+            ``"deg,Nmm"``) reads files whose units the user states,
             with clear :class:`~armlab.errors.DataError` messages for bad files.
         diagnose: ``(data, DiagnosisConfig) -> (results, series)``: localise, attribute and
             measure the gap (pure; results follow docs/diagnosis_schema.md).
@@ -140,6 +145,12 @@ class Protocol:
         groups: config group -> default option (``configs/<group>/<option>.yaml``) composed
             before the protocol's own ``configs/protocol/<name>.yaml`` (if that file exists).
         simulate: ``(cfg) -> Simulated``.
+        validate: ``(cfg) -> None``: the checks that need no simulation (the scenario, sample rates
+            against the perturbation and the sensors, filter cut-offs against Nyquist, windows
+            against the record): :class:`~armlab.errors.ConfigError` on a setting that cannot run,
+            :class:`~armlab.errors.ArmlabWarning` on one that runs but measures nothing it is set
+            for. Run by :func:`armlab.protocols.compose.compose`, so ``armlab run`` refuses before
+            its run folder exists.
         reestimate_group: the config group ``armlab estimate`` takes overrides of.
         reestimate: ``(trials, stored_config, overrides) -> results``: estimation again on a
             saved ``trials.h5`` with the run's stored config updated by the overrides.
@@ -166,6 +177,7 @@ class Protocol:
     schema: type | None = None
     groups: Mapping[str, str] = field(default_factory=dict)
     simulate: Callable[[Any], Simulated] | None = None
+    validate: Callable[[Any], None] | None = None
     reestimate_group: str | None = None
     reestimate: Callable[[TrialSet, Any, list[str]], dict] | None = None
     outputs: Callable[[OutputContext], dict] | None = None

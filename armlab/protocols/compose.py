@@ -8,9 +8,10 @@ from __future__ import annotations
 
 from dataclasses import fields, is_dataclass
 
-from armlab.config.effects import enabled_effects
+from armlab.config.effects import EFFECTS, enabled_effects
 from armlab.config.schema import ExperimentConfig
 from armlab.config.store import CONFIG_DIR, available_options, to_experiment
+from armlab.config.validate import check_finite
 from armlab.errors import ConfigError
 from armlab.protocols import registry
 from armlab.protocols.base import Protocol
@@ -55,7 +56,18 @@ def _check(protocol: Protocol, overrides: list[str]) -> None:
         if not sep:
             raise ConfigError(f"argument {item!r} must look like key=value (e.g. seed=3, arm=planar_linear)")
         bare = key.lstrip("+~")
+        if not bare:
+            raise ConfigError(f"argument {item!r} has no key before '='; give key=value (e.g. seed=3)")
         top = bare.split(".", 1)[0]
+        if key.startswith("+") and (top == "hydra" or top.startswith("hydra/")):
+            raise ConfigError(
+                f"{item}: armlab sets Hydra's existing settings and groups (e.g. hydra.run.dir=<dir>, "
+                f"hydra.sweep.dir=<dir>, hydra/launcher=joblib) but adds none; drop the '+'"
+            )
+        if bare in ("hydra.run.dir", "hydra.sweep.dir") and not value.strip():
+            raise ConfigError(
+                f"{item}: give a folder (e.g. {bare}=outputs/my_run); an empty one is the working folder"
+            )
         if top == "hydra" or top.startswith("hydra/"):  # Hydra's own settings and groups (launcher, ...)
             continue
         if bare in seen:
@@ -74,15 +86,29 @@ def _check(protocol: Protocol, overrides: list[str]) -> None:
             unknown = [n for n in names if n not in available_options("effects")]
             if unknown:
                 raise ConfigError(f"unknown effect(s) {unknown}; valid: {available_options('effects')}")
+        elif bare in groups and "." not in bare and not available_options(bare):
+            names = [f.name for f in fields(getattr(protocol.schema(), bare))]
+            raise ConfigError(
+                f"{item}: {bare!r} has no options to choose; set its fields as {bare}.<field>=<value>, "
+                f"its fields: {names}"
+            )
         elif bare in groups and "." not in bare and value not in available_options(bare):
             raise ConfigError(f"unknown {bare} {value!r}; valid: {available_options(bare)}")
     for item in overrides:
-        parts = item.partition("=")[0].split(".")
+        parts = item.partition("=")[0].lstrip("+~").split(".")
+        if parts[0] == "effects" and len(parts) > 1 and parts[1] not in available_options("effects"):
+            raise ConfigError(f"{item}: unknown effect {parts[1]!r}; valid: {available_options('effects')}")
         if parts[0] == "effects" and len(parts) > 2 and parts[1] not in selected:
             raise ConfigError(
                 f"{item}: effect {parts[1]!r} is not switched on; add effects=[{parts[1]}] "
                 f"(selected: {selected or 'none'})"
             )
+        if parts[0] == "effects" and len(parts) > 2:
+            keys = [f.name for f in fields(EFFECTS[parts[1]])]
+            if parts[2] not in keys or len(parts) > 3:
+                raise ConfigError(
+                    f"{item}: effect {parts[1]!r} has no key {'.'.join(parts[2:])!r}; its keys: {keys}"
+                )
 
 
 def _check_key_path(protocol: Protocol, path: str, item: str) -> None:
@@ -146,26 +172,43 @@ def compose(overrides: list[str]):
 
     protocol, rest = split_protocol(overrides)
     _check(protocol, rest)
+    hydra_items = [o for o in rest if o.lstrip("+~").startswith("hydra")]
     try:
         with initialize_config_dir(config_dir=str(CONFIG_DIR), version_base="1.3"):
             cfg = hydra_compose(
-                config_name=protocol.name, overrides=[o for o in rest if not o.startswith("hydra")]
+                config_name=protocol.name, overrides=[o for o in rest if o not in hydra_items]
             )
+            if hydra_items:  # Hydra's own settings and groups (hydra/launcher=joblib, hydra.run.dir=...)
+                hydra_compose(config_name=protocol.name, overrides=hydra_items, return_hydra_config=True)
     except (HydraException, OmegaConfBaseException) as exc:
-        raise ConfigError(_first_lines(exc)) from None
+        raise ConfigError(_hydra_message(exc, rest)) from None
     exp = to_experiment(cfg)
     if not isinstance(exp, protocol.schema) or not isinstance(exp, ExperimentConfig):
         raise ConfigError(f"composed config is a {type(exp).__name__}, not {protocol.schema.__name__}")
+    check_finite(exp)
+    if protocol.validate is not None:
+        protocol.validate(exp)
     return cfg, exp
 
 
-def _first_lines(exc: BaseException) -> str:
-    """The first line of ``exc`` and of its cause: Hydra's "Error merging override x=abc" alone
-    does not say what was wrong; its cause does ("Value 'abc' ... could not be converted to Float")."""
-    lines = [str(exc).strip().splitlines()[0].rstrip(".")]
-    cause = exc.__cause__ or exc.__context__
-    if cause is not None and str(cause).strip():
-        first = str(cause).strip().splitlines()[0]
-        if first not in lines[0]:
-            lines.append(first)
-    return ": ".join(lines)
+def _hydra_message(exc: BaseException, overrides: list[str]) -> str:
+    """Hydra's whole message and its cause's, on one line (``armlab: error:`` prints one line):
+    "Error merging override seed=abc" alone does not say what was wrong; its cause does ("Value
+    'abc' ... could not be converted to Integer"), and a missing option's message lists the
+    available ones. Names the override when Hydra's parser does not ("no viable alternative at
+    input '[0.1'")."""
+    parts: list[str] = []
+    for e in (exc, exc.__cause__ or exc.__context__):
+        if e is None:
+            continue
+        for line in str(e).splitlines():
+            line = line.strip().rstrip(".")
+            if line and line not in parts and not any(line in p for p in parts):
+                parts.append(line)
+    msg = "; ".join(parts).replace(":;", ":")
+    named = [o for o in overrides if o in msg or o.partition("=")[0] in msg]
+    if not named:
+        bad = [o for o in overrides if o.partition("=")[2] and o.partition("=")[2] in msg]
+        if bad:
+            msg = f"{bad[0]}: {msg}"
+    return msg

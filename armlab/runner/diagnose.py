@@ -9,6 +9,7 @@ Nothing already written is overwritten: an existing non-empty output folder is a
 
 from __future__ import annotations
 
+import inspect
 import time
 from dataclasses import replace
 from datetime import datetime
@@ -24,6 +25,7 @@ from armlab.protocols import registry
 from armlab.protocols._files import new_dir, write_json, write_new
 
 __all__ = [
+    "check_new_dir",
     "default_diagnosis_dir",
     "run_benchmark",
     "run_diagnosis",
@@ -38,25 +40,66 @@ def default_diagnosis_dir(kind: str = "diagnose") -> Path:
     return _ROOT / "outputs" / kind / datetime.now().strftime("%Y-%m-%d_%H-%M-%S-%f")
 
 
-def run_diagnoser(data: Path, protocol: str, cfg: DiagnosisConfig) -> tuple[dict, dict]:
-    """Diagnose the trial files at ``data`` with a protocol's hooks (no output files): (results, series)."""
+def check_new_dir(out_dir: Path) -> None:
+    """DataError unless ``out_dir`` is absent or an empty folder: checked before the work, so a
+    refused output folder costs no diagnosis (``new_dir`` checks again when it creates it)."""
+    out_dir = Path(out_dir)
+    if out_dir.exists() and (not out_dir.is_dir() or any(out_dir.iterdir())):
+        raise DataError(
+            f"out={out_dir} {'is not empty' if out_dir.is_dir() else 'is a file'}; armlab never overwrites "
+            "results: give a new folder"
+        )
+
+
+def run_diagnoser(
+    data: Path, protocol: str, cfg: DiagnosisConfig, units: str | None = None
+) -> tuple[dict, dict]:
+    """Diagnose the trial files at ``data`` with a protocol's hooks (no output files): (results, series).
+
+    ``units``: the data's units as the user states them (``units=`` of ``armlab diagnose``); only
+    a protocol whose ``load`` takes ``units`` reads them, any other refuses them.
+    """
     hooks = registry.get(protocol, need="diagnose").diagnosis
-    results, series = hooks.diagnose(hooks.load(Path(data), cfg), cfg)
+    if units is None:
+        loaded = hooks.load(Path(data), cfg)
+    elif "units" in inspect.signature(hooks.load).parameters:
+        loaded = hooks.load(Path(data), cfg, units=units)
+    else:
+        raise ConfigError(
+            f"units={units}: protocol {protocol!r} reads files that carry their units (its trial files); "
+            "units= applies to joint recordings (CSV or .mat) of protocols "
+            f"{[n for n in registry.names('diagnose') if _takes_units(n)]}"
+        )
+    results, series = hooks.diagnose(loaded, cfg)
     results["data"] = str(data)
     return results, series
 
 
+def _takes_units(protocol: str) -> bool:
+    return "units" in inspect.signature(registry.get(protocol).diagnosis.load).parameters
+
+
 def run_diagnosis(
-    data: Path, protocol: str, overrides: list[str] | None, out_dir: Path, *, figures: bool = True
+    data: Path,
+    protocol: str,
+    overrides: list[str] | None,
+    out_dir: Path,
+    *,
+    figures: bool = True,
+    units: str | None = None,
 ) -> tuple[Path, dict]:
-    """Diagnose and write ``results.json``, ``report.md``, figures and ``diagnosis.rrd``."""
+    """Diagnose and write ``results.json``, ``report.md``, figures and ``diagnosis.rrd``.
+
+    ``units``: see :func:`run_diagnoser`. A non-empty ``out_dir`` is refused before the diagnosis.
+    """
     hooks = registry.get(protocol, need="diagnose").diagnosis
     cfg = apply_overrides(DiagnosisConfig(), "diagnosis", overrides)
     if not Path(data).exists():
         raise DataError(f"data {str(data)!r} does not exist; give a trial file or a folder of them")
     require_complete(Path(data))  # a run folder (or its trials.h5) of a run that did not finish
+    check_new_dir(out_dir)
     t0 = time.perf_counter()
-    results, series = run_diagnoser(Path(data), protocol, cfg)
+    results, series = run_diagnoser(Path(data), protocol, cfg, units)
     results["timing_s"] = {"diagnosis": time.perf_counter() - t0}
     out = new_dir(out_dir)
     names: list[str] = []
@@ -119,6 +162,9 @@ def run_benchmark(overrides: list[str] | None, out_dir: Path) -> tuple[Path, dic
     unknown = [c for c in classes if c not in all_classes]
     if unknown:
         raise ConfigError(f"unknown referee classes {unknown} for {ref.protocol}; valid: {list(all_classes)}")
+    if referee.validate is not None:  # settings its diagnosis would refuse: before any dataset
+        referee.validate(ref, diag_cfg)
+    check_new_dir(out_dir)
     out = new_dir(out_dir)
     t0 = time.perf_counter()
     cases = Parallel(n_jobs=ref.jobs)(

@@ -96,6 +96,30 @@ class ChannelSpec:
             and self.delay_s == 0
         )
 
+    def check_rate(self, fs_hz: float, n_samples: int, name: str = "") -> None:
+        """Raise :class:`ConfigError` if this channel cannot be recorded at ``fs_hz`` for
+        ``n_samples`` samples: its bandwidth not below Nyquist, or its delay not shorter than the
+        record. Checked before any simulation (protocols' ``validate``) and by :func:`apply_channel`.
+
+        Args:
+            fs_hz: Hz, the record's sample rate (> 0).
+            n_samples: the record's length in samples.
+            name: the channel's name, prefixed to messages (e.g. ``"ft_force sensor: "``).
+        """
+        where = f"{name} sensor: " if name else ""
+        nyquist = fs_hz / 2.0
+        if self.bandwidth_hz is not None and not self.bandwidth_hz < nyquist:
+            raise ConfigError(
+                f"{where}bandwidth_hz = {self.bandwidth_hz} Hz must be below the Nyquist frequency "
+                f"{nyquist} Hz (fs_hz = {fs_hz}); use None for an ideal sensor"
+            )
+        n_delay = self.delay_samples(fs_hz)
+        if n_samples > 0 and n_delay >= n_samples:
+            raise ConfigError(
+                f"{where}delay_s = {self.delay_s} s is {n_delay} samples at {fs_hz} Hz; it must be shorter "
+                f"than the record ({n_samples} samples, i.e. delay_s < {n_samples / fs_hz} s)"
+            )
+
     def delay_samples(self, fs_hz: float) -> int:
         """The delay in whole samples at ``fs_hz`` (rounded to nearest)."""
         return int(round(self.delay_s * fs_hz))
@@ -139,18 +163,8 @@ def apply_channel(
     if not np.all(np.isfinite(y)):
         raise DataError("x contains NaN or inf; clean signals must be finite")
     n_trials, n_samples, n_axes = y.shape
-    nyquist = fs_hz / 2.0
-    if spec.bandwidth_hz is not None and not spec.bandwidth_hz < nyquist:
-        raise ConfigError(
-            f"bandwidth_hz = {spec.bandwidth_hz} Hz must be below the Nyquist frequency {nyquist} Hz "
-            f"(fs_hz = {fs_hz}); use None for an ideal sensor"
-        )
+    spec.check_rate(fs_hz, n_samples)
     n_delay = spec.delay_samples(fs_hz)
-    if n_samples > 0 and n_delay >= n_samples:
-        raise ConfigError(
-            f"delay_s = {spec.delay_s} s is {n_delay} samples at {fs_hz} Hz; it must be shorter than the "
-            f"record ({n_samples} samples, i.e. delay_s < {n_samples / fs_hz} s)"
-        )
     if t0_s is None:
         t0 = np.zeros(n_trials)
     else:

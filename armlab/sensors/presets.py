@@ -180,6 +180,19 @@ class _Suite:
         """Clean channel name -> field, in the fixed order of the random streams."""
         return cls.CHANNELS
 
+    def check_rate(self, fs_hz: float, n_samples: int) -> None:
+        """Raise :class:`ConfigError` if any channel cannot be recorded at ``fs_hz`` for
+        ``n_samples`` samples (see :meth:`ChannelSpec.check_rate`); the message names the channel
+        and says that ``sensors.fs_hz`` (or ``sensors.preset=ideal``) is what to change."""
+        for channel, field_name in self.CHANNELS.items():
+            try:
+                getattr(self, field_name).check_rate(fs_hz, n_samples, f"{channel} ({field_name})")
+            except ConfigError as exc:
+                raise ConfigError(
+                    f"sensors.fs_hz={fs_hz:g}: {exc}; the realistic sensors need a higher sensors.fs_hz "
+                    f"(or use sensors.preset=ideal)"
+                ) from None
+
     def spec_for(self, channel: str) -> ChannelSpec:
         """The spec applied to clean channel ``channel`` (a key of :meth:`channel_fields`)."""
         try:

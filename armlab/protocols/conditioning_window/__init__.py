@@ -6,7 +6,7 @@ conditioning criteria, and the sim-to-real diagnosis of the paper's Eq. (9) mode
 """
 
 from armlab.protocols.base import Protocol
-from armlab.protocols.conditioning_window import hooks
+from armlab.protocols.conditioning_window import hooks, preflight
 from armlab.protocols.conditioning_window.config import ConditioningWindowConfig
 from armlab.protocols.conditioning_window.diagnosis import HOOKS
 from armlab.sim.lab import LAB_EFFECTS
@@ -27,6 +27,7 @@ PROTOCOL = Protocol(
         "estimator": "joint_ls",
     },
     simulate=hooks.simulate,
+    validate=preflight.validate,
     reestimate_group="estimator",
     reestimate=hooks.reestimate,
     outputs=hooks.outputs,

@@ -28,6 +28,7 @@ from armlab.sim.hold import HoldState
 from armlab.sim.lab import record_trials
 
 __all__ = [
+    "check_window_lengths",
     "ConditioningRecording",
     "PAPER_THRESHOLDS_S",
     "PAPER_XI",
@@ -129,17 +130,22 @@ def simulate_protocol(cfg: ConditioningWindowConfig) -> tuple[ConditioningRecord
     return ConditioningRecording(trials=trials, truth=rec.truth, scene=rec.scene, hold=rec.hold), scenario
 
 
-def _check_windows(trials: TrialSet, specs: list[WindowSpec]) -> np.ndarray:
-    fs = trials.fs_hz
-    samples = np.array([int(round(s.t_obs_s * fs)) for s in specs])
-    available = trials.n_samples - int(np.max(trials.onset_index))
+def check_window_lengths(specs: list[WindowSpec], fs_hz: float, available: int) -> np.ndarray:
+    """The windows' lengths in samples at ``fs_hz``; ConfigError if one is longer than the
+    ``available`` samples recorded after onset (checked before simulating and on the trials)."""
+    samples = np.array([int(round(s.t_obs_s * fs_hz)) for s in specs])
     too_long = [s.t_obs_s for s, n in zip(specs, samples, strict=True) if n > available]
     if too_long:
         raise ConfigError(
             f"observation window(s) {too_long} s are longer than the recorded data after onset "
-            f"({available / fs:.3f} s); valid: T_obs <= {available / fs:.3f} s"
+            f"({available / fs_hz:.3f} s); valid: T_obs <= {available / fs_hz:.3f} s"
+            " (estimator.t_obs_s, or the scenario's windows)"
         )
     return samples
+
+
+def _check_windows(trials: TrialSet, specs: list[WindowSpec]) -> np.ndarray:
+    return check_window_lengths(specs, trials.fs_hz, trials.n_samples - int(np.max(trials.onset_index)))
 
 
 def _entry(est: LSEstimate, truth: dict | None, fit, reduced: bool) -> dict:

@@ -16,6 +16,7 @@ from armlab.protocols.conditioning_window.experiment import (
     simulate_protocol,
     window_specs,
 )
+from armlab.protocols.conditioning_window.preflight import check_estimator
 from armlab.protocols.conditioning_window.truths import effective_truth, score_truths
 
 __all__ = ["format_table", "outputs", "reestimate", "simulate"]
@@ -38,6 +39,7 @@ def simulate(cfg: ConditioningWindowConfig) -> Simulated:
 def reestimate(trials: TrialSet, stored, overrides: list[str]) -> dict:
     """Estimation again with ``estimator.<field>=<value>`` overrides of the stored settings."""
     estimator = apply_overrides(stored_group(EstimatorConfig, stored, "estimator"), "estimator", overrides)
+    check_estimator(estimator, trials.fs_hz, int(np.min(trials.onset_index)) / trials.fs_hz)
     scenario = load_scenario(str(trials.attrs.get("scenario", "conditioning_window")))
     groups = sorted(set(np.asarray(trials.trial_meta["group"]).tolist()))
     scenario = scenario.subset(k_values=groups, n_trials=None)

@@ -5,7 +5,7 @@ frequency response G = theta / F by Welch's method and Levy fits of Table I's st
 """
 
 from armlab.protocols.base import Protocol
-from armlab.protocols.fractional_elbow import hooks
+from armlab.protocols.fractional_elbow import hooks, preflight
 from armlab.protocols.fractional_elbow.config import FractionalElbowConfig
 
 __all__ = ["PROTOCOL", "FractionalElbowConfig"]
@@ -17,6 +17,7 @@ PROTOCOL = Protocol(
     schema=FractionalElbowConfig,
     groups={"sensors": "realistic", "scenario": "fractional_elbow"},
     simulate=hooks.simulate,
+    validate=preflight.validate,
     reestimate_group="frf",
     reestimate=hooks.reestimate,
     outputs=hooks.outputs,

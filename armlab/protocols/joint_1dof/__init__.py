@@ -39,7 +39,7 @@ PROTOCOL = Protocol(
     commands=(
         Command(
             name="fit-joint",
-            usage="fit-joint <csv|folder> [frf.<field>=<value>] [out=<dir>]",
+            usage="fit-joint <csv|mat|folder> [frf.<field>=<value>] [units=<deg|Nmm|deg,Nmm>] [out=<dir>]",
             help="impedance/admittance fits of real 1-DoF joint recordings (t_s,position_rad,torque_Nm CSV)",
             run=run_fit_joint,
         ),

@@ -15,7 +15,7 @@ from omegaconf import OmegaConf
 
 from armlab.config.schema import FrfConfig
 from armlab.config.store import apply_overrides
-from armlab.data.reklab import list_ankle_trials, load_ankle_trial
+from armlab.data.joint_import import load_joint_data
 from armlab.errors import ConfigError, DataError
 from armlab.protocols._files import write_json, write_new
 from armlab.protocols.joint_1dof.frf import JOINT_BAND_HZ, fit_joint_frf
@@ -35,21 +35,15 @@ def joint_frf_config(overrides: list[str] | None = None) -> FrfConfig:
     return apply_overrides(FrfConfig(band_hz=JOINT_BAND_HZ), "frf", overrides)
 
 
-def _sources(source: Path) -> list[tuple[Path, str]]:
-    if source.is_dir():
-        names = list_ankle_trials(source)
-        if not names:
-            raise DataError(f"{source} holds no *.csv trials (columns t_s,position_rad,torque_Nm)")
-        return [(source, n) for n in names]
-    if source.is_file() and source.suffix.lower() == ".csv":
-        return [(source.parent, source.stem)]
-    raise DataError(f"{source} is neither a folder of CSV trials nor a .csv file")
-
-
-def fit_joint_recordings(source: Path | str, frf: FrfConfig, out_dir: Path | str, *, viz) -> dict:
+def fit_joint_recordings(
+    source: Path | str, frf: FrfConfig, out_dir: Path | str, *, viz, units: str | None = None
+) -> dict:
     """Fit every trial of ``source`` and write the outputs into the new directory ``out_dir``.
 
-    ``viz`` is :mod:`armlab.viz`, handed in by the edge (a protocol never imports it).
+    The trials are read by :func:`armlab.data.joint_import.load_joint_data`, with every check of
+    the other data verbs (one sample rate per folder, units within human ranges unless ``units``
+    states them, e.g. ``"deg"``). ``viz`` is :mod:`armlab.viz`, handed in by the edge (a
+    protocol never imports it).
     """
     out_dir = Path(out_dir)
     if out_dir.exists() and not out_dir.is_dir():
@@ -57,8 +51,11 @@ def fit_joint_recordings(source: Path | str, frf: FrfConfig, out_dir: Path | str
     if out_dir.exists() and any(out_dir.iterdir()):
         raise DataError(f"{out_dir} is not empty; armlab never overwrites results — use a new directory")
     trials, series = {}, {}
-    for root, name in _sources(Path(source)):
-        trial = load_ankle_trial(name, root)
+    records = load_joint_data(Path(source), units=units)
+    for trial in records:  # every file checked before the first fit
+        frf.check_recording(trial.fs_hz, trial.n_samples, f"recording {trial.path.name}")
+    for trial in records:
+        name = trial.name
         res, ser = fit_joint_frf(trial.position, trial.torque, trial.fs_hz, frf, name)
         res["time_varying"] = trial.operating_point is not None  # an LTI fit is only a summary there
         res["source"] = str(trial.path)
@@ -106,17 +103,19 @@ def default_out_dir() -> Path:
 
 
 def run_fit_joint(args: list[str], viz) -> int:
-    """``armlab fit-joint <csv|folder> [frf.<field>=<value>] [out=<dir>]``."""
+    """``armlab fit-joint <csv|mat|folder> [frf.<field>=<value>] [units=<u>] [out=<dir>]``."""
     if not args or "=" in args[0]:
         raise ConfigError("fit-joint needs a CSV file or folder: armlab fit-joint <csv|folder> [frf.<f>=<v>]")
     out = default_out_dir()
-    rest = []
+    rest, units = [], None
     for item in args[1:]:
         if item.startswith("out="):
             out = Path(item.partition("=")[2])
+        elif item.startswith("units="):
+            units = item.partition("=")[2]
         else:
             rest.append(item)
-    results = fit_joint_recordings(Path(args[0]), joint_frf_config(rest), out, viz=viz)
+    results = fit_joint_recordings(Path(args[0]), joint_frf_config(rest), out, viz=viz, units=units)
     print(format_joint_table(results))
     print(f"outputs: {out}")
     return 0

@@ -5,7 +5,7 @@ stiffness and a relaxed arm; Method 1 (virtual sensor) against Method 2 (F/T sen
 """
 
 from armlab.protocols.base import Protocol
-from armlab.protocols.virtual_force_sensor import hooks
+from armlab.protocols.virtual_force_sensor import hooks, preflight
 from armlab.protocols.virtual_force_sensor.config import VirtualForceSensorConfig
 
 __all__ = ["PROTOCOL", "VirtualForceSensorConfig"]
@@ -17,6 +17,7 @@ PROTOCOL = Protocol(
     schema=VirtualForceSensorConfig,
     groups={"arm": "planar_hill", "sensors": "realistic"},
     simulate=hooks.simulate,
+    validate=preflight.validate,
     reestimate_group="vfs",
     reestimate=hooks.reestimate,
     outputs=hooks.outputs,

@@ -177,7 +177,34 @@ def load_cond_trials(path: Path):
             raise DataError(
                 f"{path.name} lacks attr {key!r} (segment length, m); have {sorted(trials.attrs)}"
             )
+    _check_units(path, trials)
     return trials
+
+
+# m: the hand from the shoulder; the longest human arms (shoulder to fingertip) measure ~0.8 m
+_MAX_HAND_POS_M = 1.0
+# N: the largest forces a human arm pushes or pulls with are some 300-600 N (maximal effort)
+_MAX_HAND_FORCE_N = 1000.0
+
+
+def _check_units(path: Path, trials) -> None:
+    """The stored units are those the diagnosis computes in (m, N), and the values are within
+    human ranges (a file written in mm or with forces in mN is refused, naming the channel)."""
+    for name, unit, bound, other in (
+        ("hand_pos", "m", _MAX_HAND_POS_M, "mm"),
+        ("hand_force", "N", _MAX_HAND_FORCE_N, "mN"),
+    ):
+        stored = trials.units.get(name)
+        if stored != unit:
+            raise DataError(
+                f"{path.name}: channel {name!r} is in {stored!r}; the diagnosis reads it in {unit!r}"
+            )
+        peak = float(np.max(np.abs(trials.channel(name))))
+        if peak > bound:
+            raise DataError(
+                f"{path.name}: channel {name!r} reaches {peak:.4g} {unit}, beyond a human arm's range "
+                f"(<= {bound:g} {unit}): it looks like {other} stored as {unit!r}; store it in {unit}"
+            )
 
 
 def _holdout(direction: np.ndarray, group: np.ndarray, holdout_fraction: float) -> np.ndarray:

@@ -7,7 +7,7 @@ rules (:mod:`.rules`); :data:`HOOKS` is what the protocol declares.
 
 from armlab.data.joint_import import load_joint_data
 from armlab.protocols.base import DiagnosisHooks, Referee
-from armlab.protocols.joint_1dof.diagnosis.diagnose import diagnose_joint
+from armlab.protocols.joint_1dof.diagnosis.diagnose import check_referee, diagnose_joint
 from armlab.protocols.joint_1dof.diagnosis.models import JOINT_SURROGATES
 from armlab.protocols.joint_1dof.diagnosis.referee import JOINT_CLASSES, describe, make_dataset
 from armlab.protocols.joint_1dof.diagnosis.report import format_report
@@ -16,7 +16,7 @@ from armlab.protocols.joint_1dof.diagnosis.rules import RULES
 __all__ = ["HOOKS"]
 
 HOOKS = DiagnosisHooks(
-    load=lambda path, cfg: load_joint_data(path, min_duration_s=cfg.min_duration_s),
+    load=lambda path, cfg, units=None: load_joint_data(path, min_duration_s=cfg.min_duration_s, units=units),
     diagnose=diagnose_joint,
     candidates=tuple(JOINT_SURROGATES),
     rules=RULES,
@@ -28,5 +28,6 @@ HOOKS = DiagnosisHooks(
         make_dataset=make_dataset,
         describe=describe,
         settings=("n_trials", "trial_s", "fs_hz", "noise_std_Nm"),
+        validate=check_referee,
     ),
 )

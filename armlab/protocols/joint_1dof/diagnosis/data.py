@@ -149,8 +149,9 @@ def prepare_trials(
     fs_fit = fs / q
     if band_hz >= 0.45 * fs_fit:
         raise DataError(
-            f"band {band_hz} Hz needs a fitting rate above {band_hz / 0.45:.0f} Hz; "
-            f"the data give {fs_fit:g} Hz"
+            f"diagnosis.band_hz={band_hz:g} Hz needs a fitting rate above {band_hz / 0.45:.0f} Hz; the data "
+            f"({fs:g} Hz) with diagnosis.fs_fit_hz={fs_fit_hz:g} give {fs_fit:g} Hz; valid: band_hz < "
+            f"{0.45 * fs_fit:.3g} Hz, or a higher fs_fit_hz (up to the data's rate)"
         )
     out = []
     for r in records:

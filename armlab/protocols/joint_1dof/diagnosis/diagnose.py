@@ -16,12 +16,14 @@ from armlab.diagnosis.attribution import held_out_gap, select_candidates, select
 from armlab.diagnosis.families import FittedModel
 from armlab.diagnosis.localise import band_breakdown, frf_parameters, residual_tests, window_breakdown
 from armlab.dsp import zero_phase
+from armlab.errors import ConfigError, DataError
 from armlab.protocols.joint_1dof.diagnosis.data import highpass_sos, noise_floor, prepare_trials
 from armlab.protocols.joint_1dof.diagnosis.models import JOINT_FAMILY, JOINT_SURROGATES
 from armlab.protocols.joint_1dof.diagnosis.rules import RULES
 
 __all__ = [
     "candidate_names",
+    "check_referee",
     "prepare_scoring",
     "diagnose_joint",
 ]
@@ -82,6 +84,38 @@ def prepare_scoring(records, cfg: DiagnosisConfig, **kw):
     return trials, hp, [zero_phase(hp, tr.y) for tr in trials]
 
 
+def check_referee(ref, cfg: DiagnosisConfig) -> None:
+    """ConfigError if datasets recorded at ``referee.fs_hz`` could not be diagnosed with ``cfg``
+    (the checks :func:`prepare_trials` and the candidates' rates apply to the data), before the
+    referee simulates any."""
+    fs = float(ref.fs_hz)
+    fs_fit = fs / max(1, int(round(fs / cfg.fs_fit_hz)))
+    try:
+        if cfg.band_hz >= 0.45 * fs_fit:
+            raise DataError(
+                f"diagnosis.band_hz={cfg.band_hz:g} Hz needs a fitting rate above "
+                f"{cfg.band_hz / 0.45:.0f} Hz; the datasets give {fs_fit:g} Hz"
+            )
+        _check_rate(candidate_names(cfg), fs_fit, fs)
+    except DataError as exc:
+        raise ConfigError(f"referee.fs_hz={fs:g}: {exc}") from None
+
+
+def _check_rate(names: list[str], fs_fit: float, fs_raw: float) -> None:
+    """DataError if a candidate searches a frequency (a ``*_hz`` parameter) at or beyond the
+    fitting rate's Nyquist frequency: its filter cannot be built there (e.g. 100 Hz data against
+    the sensor-bandwidth candidate's cut-offs up to 110 Hz)."""
+    for name in names:
+        for p in JOINT_SURROGATES[name].params:
+            if p.name.endswith("_hz") and not p.upper < fs_fit / 2:
+                raise DataError(
+                    f"data sampled at {fs_raw:g} Hz are fitted at {fs_fit:g} Hz, whose Nyquist frequency "
+                    f"{fs_fit / 2:g} Hz cannot carry candidate {name!r} ({p.name} up to {p.upper:g} Hz); "
+                    f"valid: data sampled at >= {2 * p.upper:g} Hz (diagnosis.fs_fit_hz above that), or "
+                    f"diagnosis.exclude=[{name}]"
+                )
+
+
 def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
     trials, hp, y_band = prepare_scoring(records, cfg)
     fs = trials[0].fs_hz
@@ -90,6 +124,7 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
     tss = sum(float(np.sum(y[tr.held] ** 2)) for y, tr in zip(y_band, trials, strict=True))
     floor = noise.variance_Nm2 * n_h / tss
     names = candidate_names(cfg)
+    _check_rate(names, fs, records[0].fs_hz)
     sel = select_effects(
         trials,
         y_band,

@@ -1,0 +1,42 @@
+"""The checks of a ``fractional_elbow`` config that need no simulation (``Protocol.validate``).
+
+Run by :func:`armlab.protocols.compose.compose`, so ``armlab run`` refuses before its run folder
+exists: the scenario and its sample rate, the FRF settings against the trial (band below Nyquist,
+Welch window within the record, the FIR's edges below Nyquist), the multisine below Nyquist and
+the sensors' bandwidths and delays against the rate.
+"""
+
+from __future__ import annotations
+
+from armlab.errors import ConfigError
+from armlab.perturbations.multisine import load_force_scenario
+from armlab.protocols.fractional_elbow.config import FractionalElbowConfig
+from armlab.sensors.presets import DD_ENCODER, JR3_FORCE
+
+__all__ = ["validate"]
+
+
+def validate(cfg: FractionalElbowConfig) -> None:
+    """Raise :class:`ConfigError` on a setting the run cannot support."""
+    scenario = load_force_scenario(cfg.scenario.name, cfg.scenario.n_trials)
+    fs = scenario.fs_hz
+    if abs(cfg.sensors.fs_hz - fs) > 1e-9:
+        raise ConfigError(
+            f"sensors.fs_hz = {cfg.sensors.fs_hz:g} Hz differs from the scenario's {fs:g} Hz; "
+            f"valid: sensors.fs_hz={fs:g}"
+        )
+    if cfg.scenario.k_values is not None:
+        raise ConfigError(
+            f"scenario.k_values={cfg.scenario.k_values}: the fractional_elbow scenario has no windows to "
+            "pick (it reads scenario.name and scenario.n_trials); leave scenario.k_values unset"
+        )
+    cfg.frf.check_recording(fs, scenario.n_samples, f"trial ({scenario.duration_s:g} s at {fs:g} Hz)")
+    nyquist = fs / 2
+    if not cfg.frf.fir_stop_hz < nyquist:
+        raise ConfigError(
+            f"frf.fir_stop_hz={cfg.frf.fir_stop_hz:g} Hz is at or above the Nyquist frequency {nyquist:g} Hz "
+            f"of the {fs:g} Hz trials; valid: below {nyquist:g} Hz"
+        )
+    if cfg.sensors.preset == "realistic":
+        for name, spec in (("force", JR3_FORCE), ("encoder", DD_ENCODER)):
+            spec.check_rate(fs, scenario.n_samples, name)
