@@ -164,7 +164,11 @@ RUN = [
         ["sensors.fs_hz=50", "T_k = 50 ms", "sensors.fs_hz >= 224"],
     ),
     ("rate-ideal-sensors", ["sensors.preset=ideal", "sensors.fs_hz=100"], ["sensors.fs_hz=100", ">= 224"]),
-    ("rate-not-dividing", ["sensors.fs_hz=333"], ["sensors.fs_hz=333", "whole steps", "1000.0"]),
+    (
+        "rate-not-dividing",
+        ["sensors.fs_hz=333"],
+        ["sensors.fs_hz=333", "whole number of physics steps", "1000.0"],
+    ),
     ("rate-below-sensor-bw", ["sensors.fs_hz=250"], ["sensors.fs_hz=250", "Nyquist", "sensors.preset=ideal"]),
     ("window-not-in-scenario", ["scenario.k_values=[99]"], ["scenario.k_values [99]", "valid: 1..26"]),
     ("lowpass-above-nyquist", ["estimator.lowpass_hz=600"], ["estimator.lowpass_hz=600", "below 500 Hz"]),
@@ -211,7 +215,7 @@ RUN = [
     ("sweep-bad-value", ["-m", "seed=0,abc"], ["seed=abc", "Integer"]),
     ("sweep-bad-window", ["-m", "scenario.k_values=[26],[99]"], ["scenario.k_values [99]", "1..26"]),
     ("sweep-bad-lowpass", ["-m", "estimator.lowpass_hz=20,900"], ["estimator.lowpass_hz=900", "below 500"]),
-    ("fractional-rate", ["protocol=fractional_elbow", "sensors.fs_hz=30"], ["sensors.fs_hz = 30", "2000"]),
+    ("fractional-rate", ["protocol=fractional_elbow", "sensors.fs_hz=100"], ["sensors.fs_hz = 100", "2000"]),
     (
         "fractional-windows",
         ["protocol=fractional_elbow", "scenario.k_values=[1]"],
@@ -241,7 +245,7 @@ RUN = [
     (
         "vfs-rate",
         ["protocol=virtual_force_sensor", "sensors.fs_hz=333"],
-        ["sensors.fs_hz=333", "whole steps"],
+        ["sensors.fs_hz=333", "whole number of physics steps"],
     ),
     ("vfs-sensors", ["protocol=virtual_force_sensor", "sensors.fs_hz=100"], ["sensors.fs_hz=100", "Nyquist"]),
     (

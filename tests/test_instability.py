@@ -194,7 +194,7 @@ def test_capstan_divergence_names_the_reference_and_time():
         (["cuff.stiffness_N_per_m=2e7", "cuff.damping_Ns_per_m=0"], r"omega\*dt = 2\.89 .*limit 2;"),
         (["cuff.stiffness_N_per_m=5e6", "sim.timestep_s=0.001"], r"cuff\.stiffness_N_per_m < 2\.4e\+06"),
         (["sim.integrator=RK4", "cuff.damping_Ns_per_m=5000"], r"cuff\.damping_Ns_per_m < 3\.34e\+03"),
-        (["sim.timestep_s=0.0003"], r"must divide the sample period .*0\.001 / n"),
+        (["sim.timestep_s=0.0003"], r"sample period .* whole number of physics steps; .*0\.001 / n"),
     ],
 )
 def test_conditioning_settings_that_cannot_be_integrated_are_refused(overrides, bound):

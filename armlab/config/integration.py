@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 
-from armlab.config.validate import check
+from armlab.config.validate import check, divisor_rates
 
 __all__ = [
     "OMEGA_DT_LIMIT",
@@ -39,12 +39,21 @@ OMEGA_DT_LIMIT = {"Euler": 2.0, "implicitfast": 2.0, "implicit": 2.0, "RK4": 2.7
 
 
 def check_steps_per_sample(timestep_s: float, fs_hz: float, what: str = "sample") -> None:
-    """Refuse a physics step that does not divide the sample (or control) period 1/fs_hz."""
+    """Refuse a physics step that does not divide the sample (or control) period 1/fs_hz.
+
+    The message names both ways out: the rates that divide the physics rate, and the steps that
+    divide the period.
+    """
+    for key, value in (("sensors.fs_hz", fs_hz), ("sim.timestep_s", timestep_s)):
+        check(math.isfinite(value), f"{key}={value} is not a finite number; give a finite value")
+        check(value > 0, f"{key}={value:g} must be positive")
     n = round(1.0 / (fs_hz * timestep_s))
     check(
         n >= 1 and abs(n * timestep_s * fs_hz - 1.0) < 1e-9,
-        f"sim.timestep_s={timestep_s:g} s must divide the {what} period 1/sensors.fs_hz = {1.0 / fs_hz:g} s "
-        f"into whole steps; valid: sim.timestep_s = {1.0 / fs_hz:g} / n (e.g. {1.0 / (fs_hz * max(n, 1)):g})",
+        f"sensors.fs_hz={fs_hz:g} and sim.timestep_s={timestep_s:g} s: the {what} period "
+        f"1/sensors.fs_hz = {1.0 / fs_hz:g} s must be a whole number of physics steps; valid: "
+        f"sensors.fs_hz in {divisor_rates(1.0 / timestep_s)} Hz, ..., or sim.timestep_s = "
+        f"{1.0 / fs_hz:g} / n (e.g. {1.0 / (fs_hz * max(n, 1)):g})",
     )
 
 
