@@ -88,144 +88,10 @@ def compose(overrides: list[str]):
     return compose_protocol(overrides)
 
 
-def _hydra_task(cfg, resume: bool) -> None:
-    from hydra.core.hydra_config import HydraConfig
-    from omegaconf import OmegaConf
-
-    from armlab.config.store import to_experiment
-    from armlab.runner.resume import prepare_run_dir
-    from armlab.runner.run import format_table, run_protocol
-
-    exp = to_experiment(cfg)
-    hydra_cfg = HydraConfig.instance().cfg
-    out_dir = Path(hydra_cfg.hydra.runtime.output_dir)
-    config_yaml = OmegaConf.to_yaml(cfg)
-    meta = {
-        "hydra_yaml": OmegaConf.to_yaml(hydra_cfg),
-        "overrides_yaml": OmegaConf.to_yaml(hydra_cfg.hydra.overrides.task),
-    }
-    if not prepare_run_dir(out_dir, resume=resume, config_yaml=config_yaml, **meta):
-        print(f"{out_dir} is complete (results.json); left untouched")
-        return
-    results = run_protocol(exp, out_dir, config_yaml)
-    if exp.output.print_table:
-        print(format_table(results))
-    print(f"outputs: {out_dir}")
-
-
-def _sweep_values(overrides: list[str]) -> list[list[str]]:
-    """Per override, the ``key=value`` items of its sweep as Hydra reads it (``seed=0,1``,
-    ``k=[1],[2]``, ``x=range(1,3)``); one item for a plain override."""
-    from hydra.core.override_parser.overrides_parser import OverridesParser
-    from hydra.errors import HydraException
-
-    out = []
-    for item in overrides:
-        try:
-            (parsed,) = OverridesParser.create().parse_overrides([item])
-        except HydraException as exc:
-            raise ConfigError(f"{item}: {' '.join(str(exc).split())}") from None
-        key = item.partition("=")[0]
-        values = list(parsed.sweep_string_iterator()) if parsed.is_sweep_override() else None
-        out.append([f"{key}={v}" for v in values] if values else [item])
-    return out
-
-
 def _run(args: list[str]) -> int:
-    import os
+    from armlab.runner.launch import launch
 
-    import hydra
-
-    from armlab.config.store import CONFIG_DIR
-    from armlab.protocols.compose import check_effects, split_protocol
-    from armlab.runner import interrupt
-    from armlab.runner.resume import keep_file, plan_launch, restore_file
-
-    multirun = "--multirun" in args or "-m" in args
-    overrides = [a for a in args if a not in ("--multirun", "-m")]
-    bad = [a for a in overrides if a.startswith("-")]
-    if bad:
-        return _fail(f"unknown option(s) {bad}; valid: --multirun (or -m) and key=value overrides")
-    # resume=<true|false> is armlab's, not Hydra's: finish an interrupted run or sweep folder
-    flags = [a.partition("=")[2] for a in overrides if a.partition("=")[0] == "resume"]
-    if any(v not in ("true", "false") for v in flags) or len(flags) > 1:
-        return _fail(
-            f"resume={flags[-1] if len(flags) == 1 else flags}: give it once, as resume=true or resume=false"
-        )
-    resume = flags == ["true"]
-    overrides = [a for a in overrides if a.partition("=")[0] != "resume"]
-    overrides, note = plan_launch(overrides, multirun=multirun, resume=resume)
-    if note is not None:
-        print(note)
-        return 0
-    # validate everything up front (one-line errors, nothing written); of a sweep (a,b,c) its first
-    # value (lists [a,b] are values, not sweeps)
-    sweeps = _sweep_values(overrides) if multirun else [[o] for o in overrides]
-    first = [values[0] for values in sweeps]
-    _, exp = compose(first)
-    for i, values in enumerate(sweeps):  # each value of each sweep, the others at their first value
-        for item in values[1:]:
-            compose(first[:i] + [item] + first[i + 1 :])
-    protocol, overrides = split_protocol(overrides)
-    check_effects(protocol, exp)
-
-    parent = os.getpid()
-    started: list[str] = []  # the job folders this process entered (not those of joblib workers)
-
-    def task(cfg) -> None:
-        from hydra.core.hydra_config import HydraConfig
-
-        interrupt.stop_with_parent(parent)  # in a joblib worker: stop when the parent is gone
-        started.append(HydraConfig.get().runtime.output_dir)
-        try:
-            with interrupt.handle_termination():  # a joblib worker's main thread runs the task
-                _hydra_task(cfg, resume)
-        except ArmlabError as exc:
-            print(f"armlab: error: {exc}", file=sys.stderr)
-            raise SystemExit(2) from None
-        except Exception as exc:  # noqa: BLE001 - Hydra would print a traceback hint instead
-            if os.environ.get("ARMLAB_DEBUG"):
-                raise
-            msg = " ".join(str(exc).split())
-            print(
-                f"armlab: error: internal error: {type(exc).__name__}: {msg} (please report it; rerun "
-                "with ARMLAB_DEBUG=1 for the traceback)",
-                file=sys.stderr,
-            )
-            raise SystemExit(2) from None
-
-    wrapped = hydra.main(config_path=str(CONFIG_DIR), config_name=protocol.name, version_base="1.3")(task)
-    argv = sys.argv
-    sys.argv = ["armlab"] + (["--multirun"] if multirun else []) + overrides
-    sweep_yaml = _sweep_dir(overrides) / "multirun.yaml" if multirun and resume else None
-    kept = keep_file(sweep_yaml) if sweep_yaml else None
-    try:
-        with interrupt.handle_termination():
-            wrapped()
-    except interrupt.Interrupted as exc:
-        if multirun:
-            where = (
-                _sweep_dir(overrides) if any(o.startswith("hydra.sweep.dir=") for o in overrides) else None
-            )
-            fix = (
-                f"armlab run --multirun resume=true hydra.sweep.dir={where or '<sweep folder>'} <same sweep>"
-            )
-        else:
-            fix = f"armlab run resume=true hydra.run.dir={started[-1] if started else '<run folder>'}"
-        print(
-            f"armlab: interrupted ({exc}); the unfinished run is incomplete: finish it with `{fix}`",
-            file=sys.stderr,
-        )
-        return 128 + exc.signum
-    finally:
-        sys.argv = argv
-        if sweep_yaml:
-            restore_file(sweep_yaml, kept)
-    return 0
-
-
-def _sweep_dir(overrides: list[str]) -> Path:
-    return Path([o.partition("=")[2] for o in overrides if o.startswith("hydra.sweep.dir=")][-1])
+    return launch(args)
 
 
 def _estimate(args: list[str]) -> int:
@@ -387,11 +253,9 @@ def main(argv: list[str] | None = None) -> int:
         except Exception as exc:  # noqa: BLE001 - the last-resort guard of the command line
             if os.environ.get("ARMLAB_DEBUG"):
                 raise
-            msg = " ".join(str(exc).split()) or "(no message)"
-            return _fail(
-                f"internal error: {type(exc).__name__}: {msg} (please report it; rerun with ARMLAB_DEBUG=1 "
-                "for the traceback)"
-            )
+            from armlab.runner.launch import internal_error
+
+            return _fail(internal_error(exc))
 
 
 def _main(argv: list[str] | None = None) -> int:
