@@ -4,7 +4,9 @@ A run folder (made by ``armlab run``) is **complete** when it holds ``results.js
 writes it last, atomically (:mod:`armlab.data.atomic`), after every other output. A run folder
 (one holding ``.hydra/config.yaml`` or ``scene.xml``) without ``results.json`` is **incomplete**:
 its run was interrupted or failed. Every verb that reads a run folder asks
-:func:`require_complete`, which names the command that finishes it.
+:func:`require_complete`, which names the command that finishes it. A non-empty folder that is
+neither is **foreign** (the user's own files): armlab never writes into it nor removes anything
+from it, resume included.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ __all__ = [
     "RunState",
     "clean_partial",
     "partial_files",
+    "refuse_foreign",
     "require_complete",
     "resume_command",
     "run_state",
@@ -34,17 +37,27 @@ METADATA_DIR = ".hydra"
 #: files a run folder holds from its start: metadata and Hydra's job log (kept when resuming)
 _KEPT_SUFFIXES = (".log",)
 
-RunState = Literal["new", "incomplete", "complete"]
+RunState = Literal["new", "incomplete", "complete", "foreign"]
 
 
 def run_state(folder: str | Path) -> RunState:
-    """``"new"`` (absent or empty), ``"complete"`` (holds results.json) or ``"incomplete"``."""
+    """``"new"`` (absent or empty), ``"complete"`` (holds results.json), ``"incomplete"`` (a run
+    folder without it) or ``"foreign"`` (anything else: not armlab's, never written into)."""
     folder = Path(folder)
     if (folder / MARKER).is_file():
         return "complete"
     if not folder.is_dir() or not any(p for p in folder.iterdir() if not _is_log(p)):
         return "new"  # Hydra opens the job log on entry: a folder with only that is new
-    return "incomplete"
+    return "incomplete" if _is_run_folder(folder) else "foreign"
+
+
+def refuse_foreign(folder: str | Path) -> DataError:
+    """The error for a non-empty folder that is not an armlab run folder."""
+    return DataError(
+        f"{folder} is not empty and is not an armlab run folder (no .hydra/config.yaml, no scene.xml): "
+        "armlab never writes into it nor removes anything from it — choose a new hydra.run.dir "
+        "(or hydra.sweep.dir)"
+    )
 
 
 def _is_log(p: Path) -> bool:
@@ -93,11 +106,15 @@ def clean_partial(folder: str | Path) -> list[Path]:
     """Remove :func:`partial_files` of an incomplete run folder (before it is run again).
 
     Raises:
-        DataError: the folder is complete (a complete run is never touched).
+        DataError: the folder is complete (a complete run is never touched) or not a run folder
+            (the user's own files are never removed).
     """
     folder = Path(folder)
-    if run_state(folder) == "complete":
+    state = run_state(folder)
+    if state == "complete":
         raise DataError(f"{folder} holds {MARKER}: a complete run is never touched")
+    if state == "foreign":
+        raise refuse_foreign(folder)
     removed = partial_files(folder)
     for p in removed:
         if p.is_dir() and not p.is_symlink():

@@ -20,7 +20,7 @@ from pathlib import Path
 from omegaconf import OmegaConf
 
 from armlab.data.atomic import atomic_path
-from armlab.data.rundir import METADATA_DIR, clean_partial, resume_command, run_state
+from armlab.data.rundir import METADATA_DIR, clean_partial, refuse_foreign, resume_command, run_state
 from armlab.errors import DataError
 from armlab.protocols._files import write_new
 
@@ -53,6 +53,8 @@ def prepare_run_dir(
     """
     folder = Path(folder)
     state = run_state(folder)
+    if state == "foreign":
+        raise refuse_foreign(folder)
     stored = folder / METADATA_DIR / "config.yaml"
     if state != "new" and stored.is_file() and stored.read_text() != config_yaml:
         raise DataError(
@@ -89,13 +91,14 @@ def stored_overrides(folder: Path) -> tuple[str, list[str]] | None:
 
 
 def sweep_jobs(sweep_dir: Path) -> dict[str, list[str]]:
-    """The job folders of a sweep folder by state: ``{"complete": [...], "incomplete": [...]}``."""
-    jobs: dict[str, list[str]] = {"complete": [], "incomplete": []}
+    """The job folders (``hydra.sweep.subdir``: the job number) of a sweep folder by state:
+    ``{"complete": [...], "incomplete": [...], "foreign": [...]}``."""
+    jobs: dict[str, list[str]] = {"complete": [], "incomplete": [], "foreign": []}
     sweep_dir = Path(sweep_dir)
     if not sweep_dir.is_dir():
         return jobs
     for p in sorted(sweep_dir.iterdir()):
-        state = run_state(p) if p.is_dir() else "new"
+        state = run_state(p) if p.is_dir() and p.name.isdigit() else "new"
         if state != "new":
             jobs[state].append(p.name)
     return jobs
@@ -129,6 +132,8 @@ def plan_launch(overrides: list[str], *, multirun: bool, resume: bool) -> tuple[
         return overrides, None  # a fresh timestamped folder
     if multirun:
         jobs = sweep_jobs(folder)
+        if jobs["foreign"]:
+            raise refuse_foreign(folder / jobs["foreign"][0])
         if not resume and (jobs["complete"] or jobs["incomplete"]):
             raise DataError(
                 f"sweep folder {folder} already holds jobs (complete: {jobs['complete']}, incomplete: "
@@ -143,6 +148,8 @@ def plan_launch(overrides: list[str], *, multirun: bool, resume: bool) -> tuple[
             stored = str(cfg.get("protocol_name")), [str(o) for o in cfg.hydra.overrides.task]
     else:
         state = run_state(folder)
+        if state == "foreign":
+            raise refuse_foreign(folder)
         if state == "complete" and resume:
             return overrides, f"{folder} is complete (results.json); left untouched"
         if state == "complete":

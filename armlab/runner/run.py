@@ -19,7 +19,14 @@ from omegaconf import OmegaConf
 
 from armlab.config.schema import ExperimentConfig
 from armlab.data.h5io import read_trials, write_trials
-from armlab.data.rundir import MARKER, partial_files, require_complete, resume_command, run_state
+from armlab.data.rundir import (
+    MARKER,
+    partial_files,
+    refuse_foreign,
+    require_complete,
+    resume_command,
+    run_state,
+)
 from armlab.data.trial import TrialSet
 from armlab.errors import ConfigError, DataError
 from armlab.protocols import registry
@@ -88,8 +95,11 @@ def run_protocol(cfg: ExperimentConfig, out_dir: Path, config_yaml: str = "") ->
     registry.get(cfg.protocol_name, need="run")
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
-    if run_state(out_dir) == "complete":
+    state = run_state(out_dir)
+    if state == "complete":
         raise DataError(f"{out_dir} already holds results.json; armlab never overwrites a run")
+    if state == "foreign":
+        raise refuse_foreign(out_dir)
     left = partial_files(out_dir)
     if left:  # refused before simulating, not after
         raise DataError(
