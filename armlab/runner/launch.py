@@ -11,9 +11,10 @@ from __future__ import annotations
 
 import os
 import sys
+import warnings
 from pathlib import Path
 
-from armlab.errors import ArmlabError, ConfigError
+from armlab.errors import ArmlabError, ArmlabWarning, ConfigError
 
 __all__ = ["internal_error", "launch", "sweep_values"]
 
@@ -33,10 +34,16 @@ def _hydra_task(cfg, resume: bool) -> None:
     from omegaconf import OmegaConf
 
     from armlab.config.store import to_experiment
+    from armlab.protocols import registry
     from armlab.runner.resume import prepare_run_dir
     from armlab.runner.run import format_table, run_protocol
 
     exp = to_experiment(cfg)
+    protocol = registry.get(exp.protocol_name, need="run")
+    if protocol.validate is not None:  # this job's combination of sweep values (checked one by one up front)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", ArmlabWarning)  # shown once up front
+            protocol.validate(exp)
     hydra_cfg = HydraConfig.instance().cfg
     out_dir = Path(hydra_cfg.hydra.runtime.output_dir)
     config_yaml = OmegaConf.to_yaml(cfg)
