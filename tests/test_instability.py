@@ -212,19 +212,29 @@ def test_fractional_step_must_divide_the_control_period():
 
 
 def test_fractional_grasp_the_step_cannot_integrate_is_refused_before_simulating():
-    cfg = compose(["protocol=fractional_elbow", "elbow.grasp_stiffness_N_per_m=2e8"])[1]
+    # refused by compose (Protocol.validate), i.e. before `armlab run` makes its folder, and again
+    # by simulate_fractional for Python callers who build the config themselves
+    bad = ["protocol=fractional_elbow", "elbow.grasp_stiffness_N_per_m=2e8"]
+    with pytest.raises(ConfigError, match=r"elbow\.grasp_stiffness_N_per_m < 1\.04e\+08 N/m"):
+        compose(bad)
+    cfg = compose(["protocol=fractional_elbow"])[1]
+    cfg = replace(cfg, elbow=replace(cfg.elbow, grasp_stiffness_N_per_m=2e8))
     with pytest.raises(ConfigError, match=r"elbow\.grasp_stiffness_N_per_m < 1\.04e\+08 N/m"):
         simulate_fractional(cfg)
 
 
 def test_capstan_cable_the_step_cannot_integrate_is_refused_before_simulating():
-    cfg = compose(["protocol=virtual_force_sensor", "capstan.cable_stiffness_Nm_per_rad=1e5"])[1]
-    with pytest.raises(ConfigError, match=r"capstan\.cable_stiffness_Nm_per_rad < 8\.58e\+04 N m/rad"):
+    bound = r"capstan\.cable_stiffness_Nm_per_rad < 8\.58e\+04 N m/rad"
+    with pytest.raises(ConfigError, match=bound):  # before `armlab run` makes its folder
+        compose(["protocol=virtual_force_sensor", "capstan.cable_stiffness_Nm_per_rad=1e5"])
+    cfg = compose(["protocol=virtual_force_sensor"])[1]
+    cfg = replace(cfg, capstan=replace(cfg.capstan, cable_stiffness_Nm_per_rad=1e5))
+    with pytest.raises(ConfigError, match=bound):  # and for Python callers
         simulate_vfs(cfg)
     rigid = replace(cfg, capstan=replace(cfg.capstan, cable="rigid"))  # no cable spring: no bound
-    from armlab.protocols.virtual_force_sensor.experiment import _check_cable
+    from armlab.protocols.virtual_force_sensor.preflight import check_cable
 
-    _check_cable(rigid)
+    check_cable(rigid)
 
 
 # --- valid defaults stay far inside every bound -------------------------------------------------
@@ -281,13 +291,13 @@ def test_default_capstan_trials_stay_far_below_the_handle_force_bound():
 
 
 def test_every_default_protocol_passes_the_up_front_checks():
-    from armlab.protocols.fractional_elbow.experiment import _check_grasp
-    from armlab.protocols.virtual_force_sensor.experiment import _check_cable
+    from armlab.protocols.fractional_elbow.preflight import check_grasp
+    from armlab.protocols.virtual_force_sensor.preflight import check_cable
 
     compose(["protocol=conditioning_window"])
     frac = compose(["protocol=fractional_elbow"])[1]
-    _check_grasp(build_direct_drive_scene(frac.elbow, frac.sim), frac)
-    _check_cable(compose(["protocol=virtual_force_sensor"])[1])
+    check_grasp(build_direct_drive_scene(frac.elbow, frac.sim), frac)
+    check_cable(compose(["protocol=virtual_force_sensor"])[1])
 
 
 # --- the CLI: one line, exit 2, nothing written -------------------------------------------------
@@ -314,7 +324,7 @@ def test_cli_refuses_a_cuff_the_step_cannot_integrate_before_writing(tmp_path):
         "run", "cuff.stiffness_N_per_m=1e7", "cuff.damping_Ns_per_m=0", f"hydra.run.dir={run}", cwd=tmp_path
     )
     _one_line_error(proc, "cuff.stiffness_N_per_m=1e+07", "< 9.6e+06 N/m")
-    assert not (run / "results.json").exists() and not (run / "trials.h5").exists()
+    assert not run.exists()  # refused before Hydra makes the run folder
 
 
 def test_cli_names_a_trial_that_diverges_and_writes_no_result(tmp_path):

@@ -18,10 +18,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from armlab.config.integration import check_spring
 from armlab.config.schema import FrfConfig
 from armlab.data.trial import TrialSet
-from armlab.errors import ConfigError, DataError, EstimationError
+from armlab.errors import DataError, EstimationError
 from armlab.estimation.criteria import relative_error
 from armlab.estimation.five_element_fit import (
     best_five_element,
@@ -42,6 +41,7 @@ from armlab.models.tf_structures import (
 )
 from armlab.perturbations.multisine import ForceScenario, load_force_scenario, multisine
 from armlab.protocols.fractional_elbow.config import FractionalElbowConfig
+from armlab.protocols.fractional_elbow.preflight import validate
 from armlab.sensors.channel import ChannelSpec
 from armlab.sensors.presets import DD_ENCODER, JR3_FORCE
 from armlab.sim.force_control import FORCE_LOOP_HINT, simulate_force_trial
@@ -101,37 +101,11 @@ class FractionalRecording:
     scene: DirectDriveScene
 
 
-def _check_grasp(scene: DirectDriveScene, cfg: FractionalElbowConfig) -> None:
-    """Refuse a grasp spring the step cannot integrate (before simulating).
-
-    The grasp couples the handle (motor and link, ``link_inertia``) to the hand (forearm,
-    ``elbow_inertia``): its mode moves their reduced inertia I_r = I1 I2 / (I1 + I2), i.e. a mass
-    I_r / L² at the handle for the translational ``elbow.grasp_stiffness_N_per_m`` (0.26 kg with
-    the default models: the bound is 1.0e8 N/m at 0.1 ms, the default 15 000 N/m has omega*dt 0.02).
-    """
-    i1, i2 = scene.link_inertia, scene.elbow_inertia
-    check_spring(
-        "elbow.grasp_stiffness_N_per_m",
-        cfg.elbow.grasp_stiffness_N_per_m,
-        i1 * i2 / (i1 + i2) / scene.link_length**2,
-        "the handle and forearm's reduced inertia over L² (their grasp mode)",
-        cfg.sim.timestep_s,
-        cfg.sim.integrator,
-        damping=cfg.elbow.grasp_damping_Ns_per_m,
-        damping_name="elbow.grasp_damping_Ns_per_m",
-    )
-
-
 def simulate_fractional(cfg: FractionalElbowConfig) -> FractionalRecording:
     """Simulate every trial of the protocol (``cfg.scenario.n_trials`` of them, or the scenario's)."""
+    validate(cfg)  # refused up front by compose already; here for Python callers
     scenario = load_force_scenario(cfg.scenario.name, cfg.scenario.n_trials)
-    if abs(cfg.sensors.fs_hz - scenario.fs_hz) > 1e-9:
-        raise ConfigError(
-            f"sensors.fs_hz = {cfg.sensors.fs_hz} Hz differs from the scenario's {scenario.fs_hz} Hz; "
-            f"valid: sensors.fs_hz={scenario.fs_hz:g}"
-        )
     scene = build_direct_drive_scene(cfg.elbow, cfg.sim)
-    _check_grasp(scene, cfg)
     truth = elbow_truth(scene, cfg.elbow, scenario.fs_hz, cfg.motor.sensed_mass_kg)
     ideal = cfg.sensors.preset == "ideal"
     force_spec, enc_spec = (ChannelSpec(), ChannelSpec()) if ideal else (JR3_FORCE, DD_ENCODER)

@@ -3,17 +3,40 @@
 Run by :func:`armlab.protocols.compose.compose`, so ``armlab run`` refuses before its run folder
 exists: the scenario and its sample rate, the FRF settings against the trial (band below Nyquist,
 Welch window within the record, the FIR's edges below Nyquist), the multisine below Nyquist and
-the sensors' bandwidths and delays against the rate.
+the sensors' bandwidths and delays against the rate, the grasp spring against the physics step.
 """
 
 from __future__ import annotations
 
+from armlab.config.integration import check_spring
 from armlab.errors import ConfigError
+from armlab.models.direct_drive_scene import DirectDriveScene, build_direct_drive_scene
 from armlab.perturbations.multisine import load_force_scenario
 from armlab.protocols.fractional_elbow.config import FractionalElbowConfig
 from armlab.sensors.presets import DD_ENCODER, JR3_FORCE
 
-__all__ = ["validate"]
+__all__ = ["check_grasp", "validate"]
+
+
+def check_grasp(scene: DirectDriveScene, cfg: FractionalElbowConfig) -> None:
+    """Refuse a grasp spring the step cannot integrate (before simulating).
+
+    The grasp couples the handle (motor and link, ``link_inertia``) to the hand (forearm,
+    ``elbow_inertia``): its mode moves their reduced inertia I_r = I1 I2 / (I1 + I2), i.e. a mass
+    I_r / L² at the handle for the translational ``elbow.grasp_stiffness_N_per_m`` (0.26 kg with
+    the default models: the bound is 1.0e8 N/m at 0.1 ms, the default 15 000 N/m has omega*dt 0.02).
+    """
+    i1, i2 = scene.link_inertia, scene.elbow_inertia
+    check_spring(
+        "elbow.grasp_stiffness_N_per_m",
+        cfg.elbow.grasp_stiffness_N_per_m,
+        i1 * i2 / (i1 + i2) / scene.link_length**2,
+        "the handle and forearm's reduced inertia over L² (their grasp mode)",
+        cfg.sim.timestep_s,
+        cfg.sim.integrator,
+        damping=cfg.elbow.grasp_damping_Ns_per_m,
+        damping_name="elbow.grasp_damping_Ns_per_m",
+    )
 
 
 def validate(cfg: FractionalElbowConfig) -> None:
@@ -40,3 +63,4 @@ def validate(cfg: FractionalElbowConfig) -> None:
     if cfg.sensors.preset == "realistic":
         for name, spec in (("force", JR3_FORCE), ("encoder", DD_ENCODER)):
             spec.check_rate(fs, scenario.n_samples, name)
+    check_grasp(build_direct_drive_scene(cfg.elbow, cfg.sim), cfg)

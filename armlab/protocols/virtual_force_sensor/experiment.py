@@ -20,14 +20,14 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from armlab.config.integration import check_spring
 from armlab.data.trial import TrialSet
 from armlab.models.arm_endpoint import endpoint_truth, relaxed_activation
-from armlab.models.capstan_robot import CAPSTAN_RATIO, ROTOR_INERTIA_KGM2, TABLE_VI_ALPHA
+from armlab.models.capstan_robot import TABLE_VI_ALPHA
 from armlab.models.capstan_scene import CapstanScene, build_capstan_scene
 from armlab.models.spring_array import TABLE_I_PAYLOADS_KG, TABLE_I_STIFFNESS, table_i_array
 from armlab.perturbations.sum_of_sines import sum_of_sines
 from armlab.protocols.virtual_force_sensor.config import VirtualForceSensorConfig
+from armlab.protocols.virtual_force_sensor.preflight import check_cable
 from armlab.sensors.presets import CapstanSensorSuite, measure
 from armlab.sim.capstan_lab import CAPSTAN_HINT, CLEAN_UNITS, simulate_capstan
 from armlab.sim.stability import TrialLabels
@@ -125,31 +125,9 @@ def _scene(cfg: VirtualForceSensorConfig, load: str, **kw) -> CapstanScene:
     )
 
 
-def _check_cable(cfg: VirtualForceSensorConfig) -> None:
-    """Refuse a compliant capstan cable the step cannot integrate (before simulating).
-
-    The cable spring (link side, N m/rad) moves the rotor, whose inertia seen from the link is
-    N² J_m = 10² x 1.34e-5 = 1.34e-3 kg m² (models/capstan_planar, armlab.models.capstan_robot); the
-    link is far heavier. Default: 2000 N m/rad at 0.25 ms, omega*dt = 0.31 (bound 8.6e4 N m/rad).
-    """
-    if cfg.capstan.cable == "compliant":
-        check_spring(
-            "capstan.cable_stiffness_Nm_per_rad",
-            cfg.capstan.cable_stiffness_Nm_per_rad,
-            CAPSTAN_RATIO**2 * ROTOR_INERTIA_KGM2,
-            "the rotor's inertia seen from the link (N² J_m)",
-            cfg.sim.timestep_s,
-            cfg.sim.integrator,
-            unit="N m/rad",
-            mass_unit="kg m²",
-            damping=cfg.capstan.cable_damping_Nms_per_rad,
-            damping_name="capstan.cable_damping_Nms_per_rad",
-        )
-
-
 def simulate_vfs(cfg: VirtualForceSensorConfig) -> VfsRecording:
     """Simulate every stage of the protocol (module docstring) with the config's sensors and seed."""
-    _check_cable(cfg)
+    check_cable(cfg)  # also refused up front (preflight.validate); here for Python callers
     v = cfg.vfs
     rng = np.random.default_rng(cfg.seed)
     # the subject's fluctuation draws from a spawned child: spawning leaves ``rng``'s own stream
