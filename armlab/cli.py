@@ -243,10 +243,19 @@ def main(argv: list[str] | None = None) -> int:
     with warnings.catch_warnings():
         warnings.simplefilter("always", ArmlabWarning)
         warnings.showwarning = show
+        from armlab.runner.interrupt import Interrupted, handle_termination
+
         try:
-            return _main(argv)
+            with handle_termination():  # SIGTERM like Ctrl-C: every writer removes its temporary
+                return _main(argv)
         except ArmlabError as exc:
             return _fail(str(exc))
+        except Interrupted as exc:
+            print(
+                f"armlab: interrupted ({exc}); its output may be incomplete (no half-written file is left)",
+                file=sys.stderr,
+            )
+            return 128 + exc.signum
         except KeyboardInterrupt:
             print("armlab: interrupted", file=sys.stderr)
             return 130

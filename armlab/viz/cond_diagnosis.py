@@ -16,7 +16,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from armlab.errors import DataError
-from armlab.viz._paths import fresh_path, save_png
+from armlab.viz._paths import fresh_path, recording, save_png
 
 __all__ = ["cond_diagnosis_figures", "cond_diagnosis_recording"]
 
@@ -105,9 +105,7 @@ def cond_diagnosis_recording(
     meas, nom, cor = (_per_trial(group, k) for k in ("measured", "nominal", "corrected"))
     p = fresh_path(path, ".rrd")
     t = np.arange(cs.n_window) / cs.fs_hz
-    rec = rr.RecordingStream(app_id)
-    rec.save(p)
-    try:
+    with recording(p, app_id) as rec:  # written under a temporary name, renamed when complete
         for i in range(cs.n_trials):
             for j, joint in enumerate(_JOINTS):
                 base = f"trials/{i:03d}/{joint}"
@@ -129,7 +127,4 @@ def cond_diagnosis_recording(
                     indexes=[rr.TimeColumn(_TIMELINE, duration=[0.0])],
                     columns=rr.TextLog.columns(text=["held-out trial: scored, not fitted"], level=["INFO"]),
                 )
-        rec.flush()
-    finally:
-        rec.disconnect()
     return p
