@@ -6,9 +6,11 @@ Every joint data verb (``armlab diagnose data=... protocol=joint_1dof``, ``armla
 
 * a channel whose unit the user states (``units=deg``, ``units=Nmm``, ``units=deg,Nmm``; SI is
   ``rad`` and ``Nm``) is converted to SI and trusted as stated;
-* a channel left unstated is taken as SI and checked against human ranges; a value outside them
-  is a :class:`~armlab.errors.DataError` that names the likely unit (degrees, N·mm) and the
-  ``units=`` override that reads it, or ``units=rad,Nm`` to keep SI when the data really are.
+* a channel left unstated is taken as SI and checked against human ranges, after the stated
+  channel is converted (the torque/angle scale compares SI with SI, so stating one channel does
+  not hide the other's unit); a value outside them is a :class:`~armlab.errors.DataError` that
+  names the likely unit (degrees, N·mm) and the ``units=`` override that reads it, or
+  ``units=rad,Nm`` to keep SI when the data really are.
 """
 
 from __future__ import annotations
@@ -98,9 +100,26 @@ def _rms_dev(x: np.ndarray) -> float:
     return float(np.sqrt(np.mean((x - np.mean(x)) ** 2)))
 
 
+def _suggest(units: JointUnits, *, angle: str | None = None, torque: str | None = None) -> str:
+    """The ``units=`` that reads the file with the suspect channel in ``angle``/``torque``, keeping
+    what the user stated for the other channel (``units=Nmm`` and degrees suspected: ``deg,Nmm``)."""
+    return str(JointUnits(angle=angle or units.angle, torque=torque or units.torque))
+
+
 def _check(record: JointRecord, units: JointUnits) -> None:
+    """Check the channels left unstated in ``record``, which is already converted to SI for the
+    stated ones: the peaks of an unstated channel are its raw values, and the torque/angle scale
+    compares SI with SI, so one stated channel does not hide the other (a file in degrees and N·mm
+    read with ``units=Nmm`` alone has the scale of degrees, ~1.75 for 100 N·m/rad, not the raw
+    ratio ~1750 that lies inside the human range)."""
     where = f"{record.path.name}" + (f" ({record.name})" if record.name != record.path.stem else "")
-    keep = "units=rad,Nm states that the data are SI"
+    as_is = JointUnits(angle=units.angle or "rad", torque=units.torque or "Nm")
+    keep = (
+        "units=rad,Nm states that the data are SI"
+        if units == JointUnits()
+        else f"units={as_is} states that the unstated channel is SI"
+    )
+    deg, nmm = _suggest(units, angle="deg"), _suggest(units, torque="Nmm")
     if units.angle is None:
         angles = [record.position] + ([record.operating_point] if record.operating_point is not None else [])
         peak = max(float(np.max(np.abs(a))) for a in angles)
@@ -112,7 +131,7 @@ def _check(record: JointRecord, units: JointUnits) -> None:
         if peak > MAX_ANGLE_RAD:
             raise DataError(
                 f"{where}: the joint angle reaches {peak:.4g}, beyond any human joint's range (|angle| <= "
-                f"pi rad = 180 deg): it looks like degrees; give units=deg to read it so ({keep})"
+                f"pi rad = 180 deg): it looks like degrees; give units={deg} to read it so ({keep})"
             )
     if units.torque is None:
         peak = float(np.max(np.abs(record.torque)))
@@ -124,7 +143,7 @@ def _check(record: JointRecord, units: JointUnits) -> None:
         if peak > MAX_TORQUE_NM:
             raise DataError(
                 f"{where}: the torque reaches {peak:.4g}, beyond any human joint (|torque| <= "
-                f"{MAX_TORQUE_NM:g} N·m): it looks like N·mm; give units=Nmm to read it so ({keep})"
+                f"{MAX_TORQUE_NM:g} N·m): it looks like N·mm; give units={nmm} to read it so ({keep})"
             )
     if units.angle is None or units.torque is None:
         dp, dt = _rms_dev(record.position), _rms_dev(record.torque)
@@ -136,32 +155,32 @@ def _check(record: JointRecord, units: JointUnits) -> None:
             raise DataError(
                 f"{where}: torque/angle scale {scale:.3g} N·m/rad (rms of their variations) is below any "
                 f"human joint's ({lo:g}-{hi:g} N·m/rad): the angle looks like degrees (x 57.3 -> "
-                f"{scale * 180 / math.pi:.3g} N·m/rad in rad); give units=deg to read it so ({keep})"
+                f"{scale * 180 / math.pi:.3g} N·m/rad in rad); give units={deg} to read it so ({keep})"
             )
         if scale > hi and units.torque is None:
             raise DataError(
                 f"{where}: torque/angle scale {scale:.3g} N·m/rad (rms of their variations) is above any "
                 f"human joint's ({lo:g}-{hi:g} N·m/rad): the torque looks like N·mm (/ 1000 -> "
-                f"{scale / 1000:.3g} N·m/rad); give units=Nmm to read it so ({keep})"
+                f"{scale / 1000:.3g} N·m/rad); give units={nmm} to read it so ({keep})"
             )
 
 
 def apply_units(record: JointRecord, units: JointUnits) -> JointRecord:
-    """The record in SI (rad, N·m): stated units converted, unstated ones checked.
+    """The record in SI (rad, N·m): stated units converted, then the unstated ones checked.
 
     Returns ``record`` itself when nothing is stated and the check passes (no copy, bit-identical).
 
     Raises:
         DataError: an unstated channel outside the human ranges above, naming the likely unit.
     """
-    _check(record, units)
     a = ANGLE_UNITS[units.angle] if units.angle else 1.0
     k = TORQUE_UNITS[units.torque] if units.torque else 1.0
-    if a == 1.0 and k == 1.0:
-        return record
-    return replace(
-        record,
-        position=record.position * a,
-        torque=record.torque * k,
-        operating_point=None if record.operating_point is None else record.operating_point * a,
-    )
+    if a != 1.0 or k != 1.0:
+        record = replace(
+            record,
+            position=record.position * a,
+            torque=record.torque * k,
+            operating_point=None if record.operating_point is None else record.operating_point * a,
+        )
+    _check(record, units)  # on the converted record: the scale compares SI with SI
+    return record
