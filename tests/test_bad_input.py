@@ -53,6 +53,10 @@ def files(tmp_path_factory) -> dict[str, Path]:
         "nmm_big": _csv(d / "nmm_big.csv", 1000, 600, torque_scale=1000.0, amp=0.05),
         "nmm_small": _csv(d / "nmm_small.csv", 1000, 600, torque_scale=1000.0, amp=0.001),
         "huge": _csv(d / "huge.csv", 1000, 600, angle_scale=1e300, torque_scale=1e300),
+        # in degrees AND N·mm, 0.002 rad rms (peaks ~0.4 deg, ~700 N·mm: inside both peak bounds), so
+        # only the scale tells: raw 1745 lies inside 5-5000, in SI with one channel converted it is
+        # 1.75 (units=Nmm: degrees) or 1e5 (units=deg: N·mm)
+        "deg_nmm": _csv(d / "deg_nmm.csv", 1000, 600, angle_scale=57.29578, torque_scale=1000.0, amp=0.002),
     }
     header = "t_s,position_rad,torque_Nm\n"
     good = "".join(f"{i / 1000},{0.01 * np.sin(i)},{-np.sin(i)}\n" for i in range(50))
@@ -161,9 +165,13 @@ RUN = [
     (
         "rate-cannot-resolve",
         ["sensors.fs_hz=50"],
-        ["sensors.fs_hz=50", "T_k = 50 ms", "sensors.fs_hz >= 224"],
+        ["sensors.fs_hz=50", "T_k = 50 ms", "its velocity reaches 43.2 Hz", "sensors.fs_hz >= 86.4"],
     ),
-    ("rate-ideal-sensors", ["sensors.preset=ideal", "sensors.fs_hz=100"], ["sensors.fs_hz=100", ">= 224"]),
+    (  # 80 Hz divides the 2 kHz physics rate; only the velocity bound refuses it
+        "rate-ideal-sensors",
+        ["sensors.preset=ideal", "sensors.fs_hz=80"],
+        ["sensors.fs_hz=80", ">= 86.4", ">= 222.4 to resolve its acceleration"],
+    ),
     (
         "rate-not-dividing",
         ["sensors.fs_hz=333"],
@@ -301,6 +309,16 @@ OTHER = [
     ),
     ("diagnose-nmm", ["diagnose", "data={nmm_big}", "protocol=joint_1dof"], ["N·mm", "units=Nmm"]),
     ("diagnose-nmm-scale", ["diagnose", "data={nmm_small}", "protocol=joint_1dof"], ["scale", "units=Nmm"]),
+    (
+        "diagnose-deg-nmm-read-as-nmm",  # the stated N·mm converted first: the angle's degrees show
+        ["diagnose", "data={deg_nmm}", "protocol=joint_1dof", "units=Nmm"],
+        ["deg_nmm.csv", "scale 1.75 N·m/rad", "looks like degrees", "units=deg,Nmm", "units=rad,Nmm"],
+    ),
+    (
+        "diagnose-deg-nmm-read-as-deg",  # the stated degrees converted first: the torque's N·mm show
+        ["diagnose", "data={deg_nmm}", "protocol=joint_1dof", "units=deg"],
+        ["deg_nmm.csv", "scale 1e+05 N·m/rad", "looks like N·mm", "units=deg,Nmm", "units=deg,Nm"],
+    ),
     (
         "diagnose-bad-unit",
         ["diagnose", "data={ok}", "protocol=joint_1dof", "units=kg"],
@@ -488,6 +506,13 @@ def test_a_stated_unit_reads_the_file(files):
     assert np.std(rad.torque) / np.std(rad.position) == pytest.approx(100.0, rel=1e-6)
     (same,) = load_joint_data(files["ok"], units="rad,Nm")  # SI stated: read as it is
     assert np.array_equal(same.torque, rad.torque)
+    # degrees and N·mm both stated: read in SI with the true K = 100 N·m/rad. Of a pure spring the
+    # rms ratio is K exactly; what differs is rounding only: the CSV's 9 significant digits
+    # (<= 5e-9 relative per value) and the 7-digit degree factor the file was written with
+    # (57.29578 vs 180/pi, 8.6e-9), so rel=1e-6 is > 50 times their sum
+    (both,) = load_joint_data(files["deg_nmm"], units="deg,Nmm")
+    assert np.std(both.torque) / np.std(both.position) == pytest.approx(100.0, rel=1e-6)
+    assert np.std(both.position) == pytest.approx(0.002, rel=0.1)  # 0.002 rad rms, read from degrees
 
 
 def test_a_reflex_slower_than_every_window_is_warned_once(capsys, tmp_path):
@@ -504,6 +529,43 @@ def test_a_reflex_slower_than_every_window_is_warned_once(capsys, tmp_path):
     err = capsys.readouterr().err.splitlines()
     assert [line.split(":")[1] for line in err] == [" warning", " error"], err
     assert err[0].startswith("armlab: warning: reflex latencies") and "reflex.enabled=false" in err[0]
+
+
+def test_a_rate_that_aliases_the_acceleration_is_warned_not_refused():
+    from armlab.config.integration import check_steps_per_sample
+    from armlab.config.schema import SimConfig
+    from armlab.config.validate import divisor_rates
+    from armlab.errors import ConfigError
+    from armlab.protocols.conditioning_window.preflight import (
+        QUINTIC_ACCEL_BAND_PER_S,
+        QUINTIC_VELOCITY_BAND_PER_S,
+        check_rate,
+        quintic_band,
+    )
+
+    # the bounds are the quintic move's 99.9 % energy bands (velocity 2.155, acceleration 5.560),
+    # rounded up to 3 digits
+    c_v, c_a = quintic_band(1), quintic_band(2)
+    assert c_v == pytest.approx(2.155, abs=1e-3) and c_v <= QUINTIC_VELOCITY_BAND_PER_S < c_v + 0.01
+    assert c_a == pytest.approx(5.560, abs=1e-3) and c_a <= QUINTIC_ACCEL_BAND_PER_S < c_a + 0.01
+    # a sample-rate sweep with ideal sensors: 200 Hz runs, with one warning naming the bound
+    with pytest.warns(ArmlabWarning, match=r"sensors.fs_hz=200 aliases the acceleration .* >= 222.4") as rec:
+        compose(["sensors.preset=ideal", "sensors.fs_hz=200"])
+    assert len([w for w in rec if issubclass(w.category, ArmlabWarning)]) == 1
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", ArmlabWarning)
+        compose([])  # 1 kHz: no warning
+    # the rates the "whole number of physics steps" refusal suggests are never refused by the rate
+    # check (for T_k = 50 ms: below 86.4 Hz), at the default step and the coarsest one
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", ArmlabWarning)  # 100-200 Hz: warned, not refused
+        for timestep_s in (SimConfig().timestep_s, 1e-3):
+            for fs in divisor_rates(1.0 / timestep_s):
+                check_steps_per_sample(timestep_s, fs)
+                try:
+                    check_rate(fs, 0.05)
+                except ConfigError as exc:
+                    pytest.fail(f"suggested rate {fs} refused: {exc}")
 
 
 def test_an_unforeseen_exception_is_one_line_and_debug_shows_it(monkeypatch, capsys):

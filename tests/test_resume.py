@@ -195,6 +195,33 @@ def test_partial_files_keep_the_metadata_and_log(incomplete):
         clean_partial(incomplete)
 
 
+@pytest.mark.parametrize(
+    "argv",
+    [
+        ["run", "resume=true", "hydra.run.dir={d}"],
+        ["run", "hydra.run.dir={d}"],
+        ["run", "--multirun", "resume=true", "seed=0,1", "hydra.sweep.dir={p}"],
+    ],
+    ids=["resume", "run", "sweep-resume"],
+)
+def test_a_folder_of_the_users_own_files_is_never_written_into_nor_cleaned(argv, tmp_path, capsys):
+    """A non-empty folder that is not a run folder (no .hydra/config.yaml, no scene.xml) is refused,
+    resume included: resume removes partial outputs, and these are not armlab's to remove."""
+    own = tmp_path / "0"  # also a sweep's job 0
+    (own / "sub").mkdir(parents=True)
+    (own / "notes.csv").write_text("t,x\n0,1\n")
+    (own / "sub" / "a.txt").write_text("mine")
+    before = _snapshot(tmp_path)
+    assert run_state(own) == "foreign"
+    assert main([a.format(d=own, p=tmp_path) for a in argv]) == 2
+    err = capsys.readouterr().err
+    assert err.count("armlab: error:") == 1 and "is not an armlab run folder" in err
+    assert _snapshot(tmp_path) == before
+    with pytest.raises(DataError, match="not an armlab run folder"):
+        clean_partial(own)
+    assert _snapshot(tmp_path) == before
+
+
 # --- resume ----------------------------------------------------------------------------------------
 def test_resume_finishes_an_incomplete_run_identically(toy_run, incomplete):
     hydra_before = {k: v for k, v in _snapshot(incomplete).items() if k.startswith(".hydra")}
@@ -403,3 +430,34 @@ def test_measured_trial_files_are_not_run_folders(tmp_path):
     (tmp_path / "scene.xml").write_text("<mujoco/>")  # armlab run wrote this one
     with pytest.raises(DataError, match="incomplete run"):
         require_complete(tmp_path / "trials.h5")
+
+
+def test_a_sweep_combination_checked_only_in_its_job_is_refused_there(tmp_path):
+    """Up front each sweep value is checked with the others at their first value; the job checks
+    its own combination: (fs 400 Hz, low-pass 200 Hz) is the 4th job and is refused before it
+    writes anything (its folder holds only Hydra's log)."""
+    sweep = tmp_path / "sw"
+    proc = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "armlab.cli",
+            "run",
+            "-m",
+            "sensors.fs_hz=1000,400",
+            "estimator.lowpass_hz=30,200",
+            "scenario.k_values=[26]",
+            "scenario.n_trials=2",
+            "output.recording=false",
+            "output.figures=false",
+            "output.print_table=false",
+            f"hydra.sweep.dir={sweep}",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+    )
+    assert proc.returncode == 2 and "Traceback" not in proc.stderr
+    assert "estimator.lowpass_hz=200 Hz is at or above the Nyquist frequency 200 Hz" in proc.stderr
+    assert all((sweep / j / "results.json").is_file() for j in ("0", "1", "2"))
+    assert sorted(p.name for p in (sweep / "3").iterdir()) == ["cli.log"]
