@@ -461,3 +461,28 @@ def test_a_sweep_combination_checked_only_in_its_job_is_refused_there(tmp_path):
     assert "estimator.lowpass_hz=200 Hz is at or above the Nyquist frequency 200 Hz" in proc.stderr
     assert all((sweep / j / "results.json").is_file() for j in ("0", "1", "2"))
     assert sorted(p.name for p in (sweep / "3").iterdir()) == ["cli.log"]
+
+
+def test_sigterm_stops_any_verb_with_its_exit_status_and_no_temporary(tmp_path):
+    """Not only `run`: a diagnosis stopped by SIGTERM runs its writers' cleanup (exit 143, one
+    line, no .tmp left), instead of dying where it stood."""
+    from armlab.data.reklab import DEFAULT_REKLAB_ROOT
+
+    if not DEFAULT_REKLAB_ROOT.is_dir():
+        pytest.skip(f"the REKLAB recordings are not at {DEFAULT_REKLAB_ROOT}")
+    out = tmp_path / "diag"
+    cmd = [
+        sys.executable,
+        "-m",
+        "armlab.cli",
+        "diagnose",
+        f"data={DEFAULT_REKLAB_ROOT}",
+        "protocol=joint_1dof",
+    ]
+    proc = subprocess.Popen([*cmd, f"out={out}"], stderr=subprocess.PIPE, text=True)
+    time.sleep(6.0)  # past the imports, inside the diagnosis (it takes ~1 min)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 128 + signal.SIGTERM, err
+    assert "Traceback" not in err and "armlab: interrupted (SIGTERM)" in err
+    assert not (out.exists() and _temporaries(out))
