@@ -617,3 +617,19 @@ def test_help_of_every_verb_prints_the_usage(verb, capsys, tmp_path):
     assert main([verb, "--help"]) == 0
     out = capsys.readouterr().out
     assert out.startswith("usage: armlab <verb> [args]") and "units=" in out
+
+
+@pytest.mark.parametrize(
+    ("argv", "words"),
+    [
+        (["hydra.run.dir={t}/a", "hydra.run.dir={t}/b"], ["hydra.run.dir is given twice"]),
+        (["hydra.run.dir=''"], ["hydra.run.dir=''", "give a folder"]),
+        (["hydra.run.dir="], ["hydra.run.dir=", "give a folder"]),
+    ],
+    ids=["twice", "quoted-empty", "empty"],
+)
+def test_the_run_folder_is_given_once_and_not_empty(argv, words, tmp_path, capsys, monkeypatch):
+    monkeypatch.chdir(tmp_path)  # an empty folder would be the working folder
+    (tmp_path / "mine.txt").write_text("the user's own file")
+    _assert_refused(["run", *[a.format(t=tmp_path) for a in argv]], words, capsys)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["mine.txt"]

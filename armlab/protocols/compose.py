@@ -64,15 +64,15 @@ def _check(protocol: Protocol, overrides: list[str]) -> None:
                 f"{item}: armlab sets Hydra's existing settings and groups (e.g. hydra.run.dir=<dir>, "
                 f"hydra.sweep.dir=<dir>, hydra/launcher=joblib) but adds none; drop the '+'"
             )
-        if bare in ("hydra.run.dir", "hydra.sweep.dir") and not value.strip():
+        if bare in ("hydra.run.dir", "hydra.sweep.dir") and not value.strip().strip("'\"").strip():
             raise ConfigError(
                 f"{item}: give a folder (e.g. {bare}=outputs/my_run); an empty one is the working folder"
             )
-        if top == "hydra" or top.startswith("hydra/"):  # Hydra's own settings and groups (launcher, ...)
-            continue
         if bare in seen:
             raise ConfigError(f"{bare} is given twice ({seen[bare]!r} and {item!r}); give it once")
         seen[bare] = item
+        if top == "hydra" or top.startswith("hydra/"):  # Hydra's own settings and groups (launcher, ...)
+            continue
         if top not in groups and top not in keys:
             raise ConfigError(
                 f"{item}: {top!r} is not read by protocol {protocol.name!r}; its groups: {groups}"

@@ -106,8 +106,10 @@ def sweep_jobs(sweep_dir: Path) -> dict[str, list[str]]:
 
 def _explicit(overrides: list[str], key: str) -> Path | None:
     """The folder given as ``key=<path>`` (None: not given, or an interpolation Hydra resolves)."""
-    values = [o.partition("=")[2] for o in overrides if o.partition("=")[0] == key]
-    return Path(values[-1]) if values and "${" not in values[-1] else None
+    values = [o.partition("=")[2].strip().strip("'\"") for o in overrides if o.partition("=")[0] == key]
+    if not values or not values[-1] or "${" in values[-1]:  # an empty one is refused by compose
+        return None
+    return Path(values[-1])
 
 
 def _task_overrides(overrides: list[str]) -> list[str]:
