@@ -8,11 +8,12 @@ the reduced known-xi model of Fig. 5 reaching positive definiteness earlier, the
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
 from armlab.cli import compose
-from armlab.config.subject import SubjectConfig
 from armlab.protocols.conditioning_window import hooks
 from armlab.protocols.conditioning_window.config import ConditioningWindowConfig
 from armlab.protocols.conditioning_window.experiment import PAPER_THRESHOLDS_S
@@ -109,11 +110,7 @@ def test_tolerances_are_stated_in_results(default_run):
 
 
 def test_ideal_subject_is_one_switch_away():
+    default = compose(["protocol=conditioning_window"])[1].subject
     cfg = compose(["protocol=conditioning_window", "subject.enabled=false"])[1]
-    assert cfg.subject == SubjectConfig(
-        enabled=False,
-        fluctuation_cv=cfg.subject.fluctuation_cv,
-        fluctuation_hz=cfg.subject.fluctuation_hz,
-        trial_cv=cfg.subject.trial_cv,
-    )
+    assert default.active and cfg.subject == replace(default, enabled=False)  # nothing else moves
     assert not cfg.subject.active

@@ -160,5 +160,4 @@ def test_default_lab_misses_the_check(default_run, name):
 def test_default_lab_table_vi_viscous_terms(default_run):
     # check, not tuned: Coulomb friction (0.05 N·m) folds into alpha4, alpha5 (+14.5 %, +27 %)
     a4, a5 = default_run["alpha45_rel_err"]
-    assert 0.0 < a4 < 0.3 and 0.0 < a5 < 0.4
-    assert np.isfinite([a4, a5]).all()
+    assert 0.0 < a4 < 0.3 and 0.0 < a5 < 0.4  # a NaN fails these comparisons too
