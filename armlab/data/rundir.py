@@ -24,7 +24,7 @@ __all__ = [
     "RunState",
     "clean_partial",
     "partial_files",
-    "refuse_foreign",
+    "refusal",
     "require_complete",
     "resume_command",
     "run_state",
@@ -51,13 +51,27 @@ def run_state(folder: str | Path) -> RunState:
     return "incomplete" if _is_run_folder(folder) else "foreign"
 
 
-def refuse_foreign(folder: str | Path) -> DataError:
-    """The error for a non-empty folder that is not an armlab run folder."""
-    return DataError(
-        f"{folder} is not empty and is not an armlab run folder (no .hydra/config.yaml, no scene.xml): "
-        "armlab never writes into it nor removes anything from it — choose a new hydra.run.dir "
-        "(or hydra.sweep.dir)"
-    )
+def refusal(folder: str | Path, state: RunState) -> DataError:
+    """Why a run cannot go into ``folder`` in ``state`` (complete, incomplete or foreign): the one
+    message per state that every verb and the Python API give."""
+    if state == "complete":
+        return DataError(
+            f"{folder} already holds {MARKER}: a complete run is never touched, armlab never overwrites "
+            "a run — choose a new hydra.run.dir (or hydra.sweep.dir), or add resume=true to leave "
+            "complete runs untouched and finish incomplete ones"
+        )
+    if state == "incomplete":
+        return DataError(
+            f"{folder} is an incomplete run (no {MARKER}: it was interrupted or failed); finish it "
+            f"with `{resume_command(folder)}`, or choose a new hydra.run.dir"
+        )
+    if state == "foreign":
+        return DataError(
+            f"{folder} is not empty and is not an armlab run folder (no .hydra/config.yaml, no "
+            "scene.xml): armlab never writes into it nor removes anything from it — choose a new "
+            "hydra.run.dir (or hydra.sweep.dir)"
+        )
+    raise ValueError(f"a {state!r} folder needs no refusal")
 
 
 def _is_log(p: Path) -> bool:
@@ -86,10 +100,7 @@ def require_complete(path: str | Path) -> None:
     path = Path(path)
     folder = path if path.is_dir() else path.parent
     if _is_run_folder(folder) and run_state(folder) == "incomplete":
-        raise DataError(
-            f"{folder} is an incomplete run (no {MARKER}: it was interrupted or failed); "
-            f"finish it with `{resume_command(folder)}`"
-        )
+        raise refusal(folder, "incomplete")
 
 
 def partial_files(folder: str | Path) -> list[Path]:
@@ -111,10 +122,8 @@ def clean_partial(folder: str | Path) -> list[Path]:
     """
     folder = Path(folder)
     state = run_state(folder)
-    if state == "complete":
-        raise DataError(f"{folder} holds {MARKER}: a complete run is never touched")
-    if state == "foreign":
-        raise refuse_foreign(folder)
+    if state in ("complete", "foreign"):
+        raise refusal(folder, state)
     removed = partial_files(folder)
     for p in removed:
         if p.is_dir() and not p.is_symlink():

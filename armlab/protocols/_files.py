@@ -10,7 +10,7 @@ import numpy as np
 from armlab.data.atomic import write_text_atomic
 from armlab.errors import DataError
 
-__all__ = ["json_default", "new_dir", "write_json", "write_new"]
+__all__ = ["check_new_dir", "json_default", "new_dir", "write_json", "write_new"]
 
 
 def json_default(obj):
@@ -22,13 +22,22 @@ def json_default(obj):
     raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
 
 
-def new_dir(out: Path) -> Path:
-    """An output folder that is new or empty (created); a non-empty one is a DataError."""
+def check_new_dir(out: Path) -> None:
+    """DataError unless ``out`` is absent or an empty folder. Called before expensive work too, so a
+    refused output folder costs nothing (:func:`new_dir` checks again when it creates it)."""
     out = Path(out)
-    if out.exists() and any(out.iterdir()):
-        raise DataError(f"{out} exists and is not empty; armlab never overwrites results — choose a new out=")
-    out.mkdir(parents=True, exist_ok=True)
-    return out
+    if out.exists() and (not out.is_dir() or any(out.iterdir())):
+        raise DataError(
+            f"out={out} {'is not empty' if out.is_dir() else 'is a file'}; armlab never overwrites "
+            "results: give a new folder (a new or empty directory)"
+        )
+
+
+def new_dir(out: Path) -> Path:
+    """An output folder that is new or empty (created); any other is a DataError."""
+    check_new_dir(out)
+    Path(out).mkdir(parents=True, exist_ok=True)
+    return Path(out)
 
 
 def write_new(path: Path, text: str) -> Path:

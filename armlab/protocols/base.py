@@ -92,10 +92,10 @@ class DiagnosisHooks:
     """How ``armlab diagnose`` works for a protocol.
 
     Attributes:
-        load: ``(path, DiagnosisConfig) -> data``: read measured trials (a file or a folder);
-            a loader that also takes ``units=`` (the ``units=`` of ``armlab diagnose``, e.g.
-            ``"deg,Nmm"``) reads files whose units the user states,
-            with clear :class:`~armlab.errors.DataError` messages for bad files.
+        load: ``(path, DiagnosisConfig) -> data``: read measured trials (a file or a folder),
+            with clear :class:`~armlab.errors.DataError` messages for bad files; with
+            ``takes_units``, also ``units=`` (the ``units=`` of ``armlab diagnose``, e.g.
+            ``"deg,Nmm"``: files whose units the user states).
         diagnose: ``(data, DiagnosisConfig) -> (results, series)``: localise, attribute and
             measure the gap (pure; results follow docs/diagnosis_schema.md).
         candidates: the catalogue effects it can score (its surrogate model family's names).
@@ -106,6 +106,8 @@ class DiagnosisHooks:
         figures: ``(viz, series, results, out_dir) -> [paths]``: the diagnosis figures.
         recording: ``(viz, series, path) -> path``: the rerun recording of the diagnosis.
         referee: its blind referee, if it has one.
+        takes_units: its ``load`` reads ``units=`` (joint recordings in CSV or .mat); False for
+            files that carry their units (trial files).
     """
 
     load: Callable[[Path, DiagnosisConfig], Any]
@@ -116,6 +118,7 @@ class DiagnosisHooks:
     figures: Callable[[Any, dict, dict, Path], list[Path]]
     recording: Callable[[Any, dict, Path], Any]
     referee: Referee | None = None
+    takes_units: bool = False
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)

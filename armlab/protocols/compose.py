@@ -96,18 +96,16 @@ def _check(protocol: Protocol, overrides: list[str]) -> None:
             raise ConfigError(f"unknown {bare} {value!r}; valid: {available_options(bare)}")
     for item in overrides:
         parts = item.partition("=")[0].lstrip("+~").split(".")
-        if parts[0] == "effects" and len(parts) > 1 and parts[1] not in available_options("effects"):
-            raise ConfigError(f"{item}: unknown effect {parts[1]!r}; valid: {available_options('effects')}")
         if parts[0] == "effects" and len(parts) > 2 and parts[1] not in selected:
             raise ConfigError(
                 f"{item}: effect {parts[1]!r} is not switched on; add effects=[{parts[1]}] "
                 f"(selected: {selected or 'none'})"
             )
         if parts[0] == "effects" and len(parts) > 2:
-            keys = [f.name for f in fields(EFFECTS[parts[1]])]
-            if parts[2] not in keys or len(parts) > 3:
+            effect_keys = [f.name for f in fields(EFFECTS[parts[1]])]
+            if parts[2] not in effect_keys or len(parts) > 3:
                 raise ConfigError(
-                    f"{item}: effect {parts[1]!r} has no key {'.'.join(parts[2:])!r}; its keys: {keys}"
+                    f"{item}: effect {parts[1]!r} has no key {'.'.join(parts[2:])!r}; its keys: {effect_keys}"
                 )
 
 

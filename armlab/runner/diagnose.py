@@ -9,7 +9,6 @@ Nothing already written is overwritten: an existing non-empty output folder is a
 
 from __future__ import annotations
 
-import inspect
 import time
 from dataclasses import replace
 from datetime import datetime
@@ -22,10 +21,9 @@ from armlab.config.store import apply_overrides
 from armlab.data.rundir import require_complete
 from armlab.errors import ConfigError, DataError
 from armlab.protocols import registry
-from armlab.protocols._files import new_dir, write_json, write_new
+from armlab.protocols._files import check_new_dir, new_dir, write_json, write_new
 
 __all__ = [
-    "check_new_dir",
     "default_diagnosis_dir",
     "run_benchmark",
     "run_diagnosis",
@@ -40,43 +38,28 @@ def default_diagnosis_dir(kind: str = "diagnose") -> Path:
     return _ROOT / "outputs" / kind / datetime.now().strftime("%Y-%m-%d_%H-%M-%S-%f")
 
 
-def check_new_dir(out_dir: Path) -> None:
-    """DataError unless ``out_dir`` is absent or an empty folder: checked before the work, so a
-    refused output folder costs no diagnosis (``new_dir`` checks again when it creates it)."""
-    out_dir = Path(out_dir)
-    if out_dir.exists() and (not out_dir.is_dir() or any(out_dir.iterdir())):
-        raise DataError(
-            f"out={out_dir} {'is not empty' if out_dir.is_dir() else 'is a file'}; armlab never overwrites "
-            "results: give a new folder"
-        )
-
-
 def run_diagnoser(
     data: Path, protocol: str, cfg: DiagnosisConfig, units: str | None = None
 ) -> tuple[dict, dict]:
     """Diagnose the trial files at ``data`` with a protocol's hooks (no output files): (results, series).
 
     ``units``: the data's units as the user states them (``units=`` of ``armlab diagnose``); only
-    a protocol whose ``load`` takes ``units`` reads them, any other refuses them.
+    a protocol whose hooks declare ``takes_units`` reads them, any other refuses them.
     """
     hooks = registry.get(protocol, need="diagnose").diagnosis
     if units is None:
         loaded = hooks.load(Path(data), cfg)
-    elif "units" in inspect.signature(hooks.load).parameters:
+    elif hooks.takes_units:
         loaded = hooks.load(Path(data), cfg, units=units)
     else:
         raise ConfigError(
             f"units={units}: protocol {protocol!r} reads files that carry their units (its trial files); "
             "units= applies to joint recordings (CSV or .mat) of protocols "
-            f"{[n for n in registry.names('diagnose') if _takes_units(n)]}"
+            f"{[n for n in registry.names('diagnose') if registry.get(n).diagnosis.takes_units]}"
         )
     results, series = hooks.diagnose(loaded, cfg)
     results["data"] = str(data)
     return results, series
-
-
-def _takes_units(protocol: str) -> bool:
-    return "units" in inspect.signature(registry.get(protocol).diagnosis.load).parameters
 
 
 def run_diagnosis(
@@ -164,7 +147,6 @@ def run_benchmark(overrides: list[str] | None, out_dir: Path) -> tuple[Path, dic
         raise ConfigError(f"unknown referee classes {unknown} for {ref.protocol}; valid: {list(all_classes)}")
     if referee.validate is not None:  # settings its diagnosis would refuse: before any dataset
         referee.validate(ref, diag_cfg)
-    check_new_dir(out_dir)
     out = new_dir(out_dir)
     t0 = time.perf_counter()
     cases = Parallel(n_jobs=ref.jobs)(

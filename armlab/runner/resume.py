@@ -20,26 +20,11 @@ from pathlib import Path
 from omegaconf import OmegaConf
 
 from armlab.data.atomic import atomic_path
-from armlab.data.rundir import METADATA_DIR, clean_partial, refuse_foreign, resume_command, run_state
+from armlab.data.rundir import METADATA_DIR, clean_partial, refusal, run_state
 from armlab.errors import DataError
 from armlab.protocols._files import write_new
 
 __all__ = ["keep_file", "plan_launch", "prepare_run_dir", "restore_file", "stored_overrides", "sweep_jobs"]
-
-
-def _refuse_complete(folder: Path) -> DataError:
-    return DataError(
-        f"{folder} already holds results.json; armlab never overwrites a run — choose a new "
-        "hydra.run.dir (or hydra.sweep.dir), or add resume=true to leave complete runs untouched "
-        "and finish incomplete ones"
-    )
-
-
-def _refuse_incomplete(folder: Path) -> DataError:
-    return DataError(
-        f"{folder} is an incomplete run (no results.json: it was interrupted or failed); finish it "
-        f"with `{resume_command(folder)}`, or choose a new hydra.run.dir"
-    )
 
 
 def prepare_run_dir(
@@ -54,20 +39,18 @@ def prepare_run_dir(
     folder = Path(folder)
     state = run_state(folder)
     if state == "foreign":
-        raise refuse_foreign(folder)
+        raise refusal(folder, state)
     stored = folder / METADATA_DIR / "config.yaml"
     if state != "new" and stored.is_file() and stored.read_text() != config_yaml:
         raise DataError(
             f"{folder} holds a run of another configuration ({stored}); resume it with the overrides "
             f"in {stored.with_name('overrides.yaml')}, or choose a new output folder"
         )
+    if state != "new" and not resume:
+        raise refusal(folder, state)
     if state == "complete":
-        if resume:
-            return False
-        raise _refuse_complete(folder)
+        return False
     if state == "incomplete":
-        if not resume:
-            raise _refuse_incomplete(folder)
         clean_partial(folder)
     meta = folder / METADATA_DIR
     meta.mkdir(parents=True, exist_ok=True)
@@ -135,7 +118,7 @@ def plan_launch(overrides: list[str], *, multirun: bool, resume: bool) -> tuple[
     if multirun:
         jobs = sweep_jobs(folder)
         if jobs["foreign"]:
-            raise refuse_foreign(folder / jobs["foreign"][0])
+            raise refusal(folder / jobs["foreign"][0], "foreign")
         if not resume and (jobs["complete"] or jobs["incomplete"]):
             raise DataError(
                 f"sweep folder {folder} already holds jobs (complete: {jobs['complete']}, incomplete: "
@@ -150,14 +133,10 @@ def plan_launch(overrides: list[str], *, multirun: bool, resume: bool) -> tuple[
             stored = str(cfg.get("protocol_name")), [str(o) for o in cfg.hydra.overrides.task]
     else:
         state = run_state(folder)
-        if state == "foreign":
-            raise refuse_foreign(folder)
-        if state == "complete" and resume:
-            return overrides, f"{folder} is complete (results.json); left untouched"
+        if state == "foreign" or (state != "new" and not resume):
+            raise refusal(folder, state)
         if state == "complete":
-            raise _refuse_complete(folder)
-        if state == "incomplete" and not resume:
-            raise _refuse_incomplete(folder)
+            return overrides, f"{folder} is complete (results.json); left untouched"
         stored = stored_overrides(folder) if resume else None
     if stored is None:
         return overrides, None

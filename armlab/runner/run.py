@@ -22,7 +22,7 @@ from armlab.data.h5io import read_trials, write_trials
 from armlab.data.rundir import (
     MARKER,
     partial_files,
-    refuse_foreign,
+    refusal,
     require_complete,
     resume_command,
     run_state,
@@ -96,10 +96,8 @@ def run_protocol(cfg: ExperimentConfig, out_dir: Path, config_yaml: str = "") ->
     out_dir = Path(out_dir)
     out_dir.mkdir(parents=True, exist_ok=True)
     state = run_state(out_dir)
-    if state == "complete":
-        raise DataError(f"{out_dir} already holds results.json; armlab never overwrites a run")
-    if state == "foreign":
-        raise refuse_foreign(out_dir)
+    if state in ("complete", "foreign"):
+        raise refusal(out_dir, state)
     left = partial_files(out_dir)
     if left:  # refused before simulating, not after
         raise DataError(

@@ -12,16 +12,13 @@ from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
-from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
-from armlab.data.atomic import atomic_path
 from armlab.errors import DataError
-from armlab.viz._paths import fresh_path
+from armlab.viz._paths import DPI, fresh_path, save_png
 
 __all__ = ["plot_joint_bode"]
 
-_DPI = 120
 _FITS = (("integer", "C0", "I s² + B s + K"), ("fractional", "C3", "I s² + B s^α + K"))
 
 
@@ -31,8 +28,7 @@ def plot_joint_bode(series: Mapping[str, Mapping], path: str | Path) -> Path:
         raise DataError("plot_joint_bode needs at least one trial's series")
     path = fresh_path(path, ".png")
     n = len(series)
-    fig = Figure(figsize=(3.2 * n + 0.6, 5.2), dpi=_DPI, layout="constrained")
-    FigureCanvasAgg(fig)
+    fig = Figure(figsize=(3.2 * n + 0.6, 5.2), dpi=DPI, layout="constrained")
     axes = fig.subplots(2, n, sharex=True, squeeze=False)
     for col, (name, s) in enumerate(series.items()):
         f, Z = np.asarray(s["f_hz"]), np.asarray(s["Z"])
@@ -51,6 +47,4 @@ def plot_joint_bode(series: Mapping[str, Mapping], path: str | Path) -> Path:
     axes[0, 0].set_ylabel("|Z| (dB re 1 N·m/rad)")
     axes[1, 0].set_ylabel("phase (deg)")
     axes[0, 0].legend(fontsize=7)
-    with atomic_path(path) as tmp:  # named only once complete
-        fig.savefig(tmp, format="png")
-    return path
+    return save_png(fig, path)

@@ -16,8 +16,8 @@ from omegaconf import OmegaConf
 from armlab.config.schema import FrfConfig
 from armlab.config.store import apply_overrides
 from armlab.data.joint_import import load_joint_data
-from armlab.errors import ConfigError, DataError
-from armlab.protocols._files import write_json, write_new
+from armlab.errors import ConfigError
+from armlab.protocols._files import check_new_dir, write_json, write_new
 from armlab.protocols.joint_1dof.frf import JOINT_BAND_HZ, fit_joint_frf
 
 __all__ = [
@@ -46,10 +46,7 @@ def fit_joint_recordings(
     protocol never imports it).
     """
     out_dir = Path(out_dir)
-    if out_dir.exists() and not out_dir.is_dir():
-        raise DataError(f"{out_dir} exists and is not a directory; give a new directory for the outputs")
-    if out_dir.exists() and any(out_dir.iterdir()):
-        raise DataError(f"{out_dir} is not empty; armlab never overwrites results — use a new directory")
+    check_new_dir(out_dir)  # before the fits
     trials, series = {}, {}
     records = load_joint_data(Path(source), units=units)
     for trial in records:  # every file checked before the first fit

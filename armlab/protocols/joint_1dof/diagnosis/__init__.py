@@ -30,4 +30,5 @@ HOOKS = DiagnosisHooks(
         settings=("n_trials", "trial_s", "fs_hz", "noise_std_Nm"),
         validate=check_referee,
     ),
+    takes_units=True,
 )
