@@ -28,8 +28,8 @@ def check_new_dir(out: Path) -> None:
     out = Path(out)
     if out.exists() and (not out.is_dir() or any(out.iterdir())):
         raise DataError(
-            f"out={out} {'is not empty' if out.is_dir() else 'is a file'}; armlab never overwrites "
-            "results: give a new folder (a new or empty directory)"
+            f"out={out} {'is not empty' if out.is_dir() else 'is a file, not a directory'}; armlab never "
+            "overwrites results: give a new folder (a new directory, or an empty one)"
         )
 
 
