@@ -87,7 +87,7 @@ def run(
     cfg, exp = compose(items)
     spec, task = split_protocol(items)
     check_effects(spec, exp)
-    if out is None:
+    if out is None:  # as configs/config.yaml's hydra.run.dir names it
         out = Path("outputs") / spec.name / datetime.now().strftime("%Y-%m-%d_%H-%M-%S-%f")
     out = Path(out)
     config_yaml = OmegaConf.to_yaml(cfg)
@@ -153,10 +153,8 @@ def diagnose(
         The diagnosis results (also written to ``<out>/results.json`` with ``report.md``), with
         ``"dir"`` set to the output folder.
     """
-    from armlab.protocols import registry
     from armlab.runner.diagnose import default_diagnosis_dir, run_diagnosis
 
-    registry.get(protocol, need="diagnose")
     folder = Path(out) if out is not None else default_diagnosis_dir()
     folder, results = run_diagnosis(
         Path(data), protocol, list(overrides), folder, figures=figures, units=units
@@ -167,4 +165,4 @@ def diagnose(
 def _container(cfg) -> dict[str, Any]:
     from omegaconf import OmegaConf
 
-    return OmegaConf.to_container(cfg, resolve=True) if cfg is not None else {}
+    return OmegaConf.to_container(cfg, resolve=True)

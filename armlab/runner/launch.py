@@ -87,10 +87,11 @@ def launch(args: list[str]) -> int:
     import hydra
 
     from armlab.config.store import CONFIG_DIR
+    from armlab.data.rundir import resume_command
     from armlab.protocols.compose import check_effects, split_protocol
     from armlab.protocols.compose import compose as compose_protocol
     from armlab.runner import interrupt
-    from armlab.runner.resume import keep_file, plan_launch, restore_file
+    from armlab.runner.resume import given_folder, keep_file, plan_launch, restore_file
 
     multirun = "--multirun" in args or "-m" in args
     overrides = [a for a in args if a not in ("--multirun", "-m")]
@@ -143,21 +144,18 @@ def launch(args: list[str]) -> int:
     wrapped = hydra.main(config_path=str(CONFIG_DIR), config_name=protocol.name, version_base="1.3")(task)
     argv = sys.argv
     sys.argv = ["armlab"] + (["--multirun"] if multirun else []) + overrides
-    sweep_yaml = _sweep_dir(overrides) / "multirun.yaml" if multirun and resume else None
+    sweep = given_folder(overrides, "hydra.sweep.dir") if multirun else None
+    sweep_yaml = sweep / "multirun.yaml" if sweep is not None and resume else None
     kept = keep_file(sweep_yaml) if sweep_yaml else None
     try:
         with interrupt.handle_termination():
             wrapped()
     except interrupt.Interrupted as exc:
         if multirun:
-            where = (
-                _sweep_dir(overrides) if any(o.startswith("hydra.sweep.dir=") for o in overrides) else None
-            )
-            fix = (
-                f"armlab run --multirun resume=true hydra.sweep.dir={where or '<sweep folder>'} <same sweep>"
-            )
+            where = sweep or "<sweep folder>"
+            fix = f"armlab run --multirun resume=true hydra.sweep.dir={where} <same sweep>"
         else:
-            fix = f"armlab run resume=true hydra.run.dir={started[-1] if started else '<run folder>'}"
+            fix = resume_command(started[-1] if started else "<run folder>")
         print(
             f"armlab: interrupted ({exc}); the unfinished run is incomplete: finish it with `{fix}`",
             file=sys.stderr,
@@ -168,7 +166,3 @@ def launch(args: list[str]) -> int:
         if sweep_yaml:
             restore_file(sweep_yaml, kept)
     return 0
-
-
-def _sweep_dir(overrides: list[str]) -> Path:
-    return Path([o.partition("=")[2] for o in overrides if o.startswith("hydra.sweep.dir=")][-1])

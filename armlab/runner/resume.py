@@ -24,7 +24,15 @@ from armlab.data.rundir import METADATA_DIR, clean_partial, refusal, run_state
 from armlab.errors import DataError
 from armlab.protocols._files import write_new
 
-__all__ = ["keep_file", "plan_launch", "prepare_run_dir", "restore_file", "stored_overrides", "sweep_jobs"]
+__all__ = [
+    "given_folder",
+    "keep_file",
+    "plan_launch",
+    "prepare_run_dir",
+    "restore_file",
+    "stored_overrides",
+    "sweep_jobs",
+]
 
 
 def prepare_run_dir(
@@ -87,7 +95,7 @@ def sweep_jobs(sweep_dir: Path) -> dict[str, list[str]]:
     return jobs
 
 
-def _explicit(overrides: list[str], key: str) -> Path | None:
+def given_folder(overrides: list[str], key: str) -> Path | None:
     """The folder given as ``key=<path>`` (None: not given, or an interpolation Hydra resolves)."""
     values = [o.partition("=")[2].strip().strip("'\"") for o in overrides if o.partition("=")[0] == key]
     if not values or not values[-1] or "${" in values[-1]:  # an empty one is refused by compose
@@ -110,7 +118,7 @@ def plan_launch(overrides: list[str], *, multirun: bool, resume: bool) -> tuple[
             resume with overrides other than the folder's.
     """
     key = "hydra.sweep.dir" if multirun else "hydra.run.dir"
-    folder = _explicit(overrides, key)
+    folder = given_folder(overrides, key)
     if folder is None:
         if resume:
             raise DataError(f"resume=true needs the folder to finish: add {key}=<folder>")
