@@ -225,6 +225,11 @@ RUN = [
     ("sweep-bad-lowpass", ["-m", "estimator.lowpass_hz=20,900"], ["estimator.lowpass_hz=900", "below 500"]),
     ("fractional-rate", ["protocol=fractional_elbow", "sensors.fs_hz=100"], ["sensors.fs_hz = 100", "2000"]),
     (
+        "fractional-subject-without-muscles",
+        ["protocol=fractional_elbow", "subject.enabled=true", "elbow.impedance=five_element"],
+        ["elbow.impedance=five_element has no muscles", "elbow.impedance=muscle"],
+    ),
+    (
         "fractional-windows",
         ["protocol=fractional_elbow", "scenario.k_values=[1]"],
         ["scenario.k_values=[1]", "unset"],

@@ -132,7 +132,7 @@ class CapstanConfig:
             value = getattr(self, name)
             check(math.isfinite(value) and value >= 0, f"capstan.{name} must be >= 0, got {value!r}")
         check(
-            len(self.drag_neutral_m) == 2 and all(math.isfinite(v) for v in self.drag_neutral_m),
+            all(math.isfinite(v) for v in self.drag_neutral_m),  # its length: check_tuple_lengths
             f"capstan.drag_neutral_m must be (x, y) m, got {self.drag_neutral_m}",
         )
 

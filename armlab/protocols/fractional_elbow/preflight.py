@@ -63,4 +63,10 @@ def validate(cfg: FractionalElbowConfig) -> None:
     if cfg.sensors.preset == "realistic":
         for name, spec in (("force", JR3_FORCE), ("encoder", DD_ENCODER)):
             spec.check_rate(fs, scenario.n_samples, name)
-    check_grasp(build_direct_drive_scene(cfg.elbow, cfg.sim), cfg)
+    scene = build_direct_drive_scene(cfg.elbow, cfg.sim)
+    check_grasp(scene, cfg)
+    if cfg.subject.active and scene.muscle_act.size == 0:
+        raise ConfigError(
+            f"subject.enabled=true fluctuates muscle activations, but elbow.impedance="
+            f"{cfg.elbow.impedance} has no muscles; valid: elbow.impedance=muscle, or subject.enabled=false"
+        )
