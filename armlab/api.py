@@ -12,14 +12,14 @@ Each call goes through the same checks and writers as the command line: the over
 validated before anything is simulated (one :class:`~armlab.errors.ConfigError` naming the valid
 choices), the run folder gets the same files as ``armlab run`` makes (``.hydra/config.yaml``,
 ``overrides.yaml``, ``results.json`` written last, never overwritten), so ``armlab estimate``,
-``armlab view`` and ``armlab run resume=true hydra.run.dir=<dir>`` work on it.
+``armlab view`` and ``armlab run resume=true out=<dir>`` work on it. ``out=`` names the output
+folder as it does for every verb (armlab.data.outdir); without it, ``outputs/<protocol>/<time>``.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from datetime import datetime
 from pathlib import Path
 from typing import Any
 
@@ -79,6 +79,7 @@ def run(
     """
     from omegaconf import OmegaConf
 
+    from armlab.data.outdir import default_out
     from armlab.protocols.compose import check_effects, compose, split_protocol
     from armlab.runner.resume import prepare_run_dir
     from armlab.runner.run import run_protocol
@@ -87,9 +88,7 @@ def run(
     cfg, exp = compose(items)
     spec, task = split_protocol(items)
     check_effects(spec, exp)
-    if out is None:  # as configs/config.yaml's hydra.run.dir names it
-        out = Path("outputs") / spec.name / datetime.now().strftime("%Y-%m-%d_%H-%M-%S-%f")
-    out = Path(out)
+    out = default_out(spec.name) if out is None else Path(out)  # as `armlab run` names it
     config_yaml = OmegaConf.to_yaml(cfg)
     prepare_run_dir(
         out,
@@ -153,9 +152,10 @@ def diagnose(
         The diagnosis results (also written to ``<out>/results.json`` with ``report.md``), with
         ``"dir"`` set to the output folder.
     """
-    from armlab.runner.diagnose import default_diagnosis_dir, run_diagnosis
+    from armlab.data.outdir import default_out
+    from armlab.runner.diagnose import run_diagnosis
 
-    folder = Path(out) if out is not None else default_diagnosis_dir()
+    folder = Path(out) if out is not None else default_out("diagnose")
     folder, results = run_diagnosis(
         Path(data), protocol, list(overrides), folder, figures=figures, units=units
     )

@@ -1,13 +1,16 @@
 """``armlab`` command line: run protocols (Hydra), re-estimate saved trials, view recordings.
 
-    armlab run [protocol=<name>] [Hydra overrides ...]   simulate + estimate, outputs in the run dir
-    armlab run --multirun seed=0,1,2 ...                 sweep through Hydra's launcher
-    armlab run resume=true hydra.run.dir=<run_dir>       finish an interrupted run (its overrides)
-    armlab run --multirun resume=true hydra.sweep.dir=<d> [sweep]  run a sweep's missing jobs only
-    armlab estimate <run_dir> [<group>.<field>=<v>]      re-run estimation on saved trials.h5
+    armlab run [protocol=<name>] [out=<dir>] [Hydra overrides ...]  simulate + estimate into <dir>
+    armlab run --multirun seed=0,1,2 [out=<sweep dir>] ...  sweep through Hydra's launcher
+    armlab run resume=true out=<run_dir>                  finish an interrupted run (its overrides)
+    armlab run --multirun resume=true out=<d> [sweep]     run a sweep's missing jobs only
+    armlab estimate <run_dir> [<group>.<f>=<v>] [out=<dir>]  re-run estimation on saved trials.h5
                                                          (estimator | frf | vfs, by protocol)
     armlab view <run_dir>                                open the run's rerun recording
     armlab fit-joint <csv|folder> [frf.<f>=<v>] [out=<dir>]  FRF + Levy fits of real joint recordings
+
+Every verb that writes names its output folder with ``out=<dir>`` (default: a new
+``outputs/<protocol or verb>/<timestamp>``; armlab.data.outdir).
 
 Bad input is reported on one line (``armlab: error: ...``, exit status 2), never as a traceback.
 """
@@ -39,12 +42,14 @@ def _usage() -> str:
         "usage: armlab <verb> [args]",
         "",
         "verbs:",
-        "  run [--multirun] [protocol=<name>] [overrides]  simulate a protocol and estimate impedance",
-        "  run resume=true hydra.run.dir=<run_dir>         finish an interrupted run (same overrides, same",
+        "  run [--multirun] [protocol=<name>] [out=<dir>] [overrides]",
+        "                                                  simulate a protocol and estimate impedance",
+        "  run resume=true out=<run_dir>                   finish an interrupted run (same overrides, same",
         "                                                  results); a complete one is left untouched",
-        "  run --multirun resume=true hydra.sweep.dir=<dir> [sweep]",
+        "  run --multirun resume=true out=<sweep_dir> [sweep]",
         "                                                  run only a sweep's missing/incomplete jobs",
-        "  estimate <run_dir> [<group>.<field>=<value>]    re-run estimation on a run's trials.h5",
+        "  estimate <run_dir> [<group>.<field>=<value>] [out=<dir>]",
+        "                                                  re-run estimation on a run's trials.h5",
         "  view <run_dir>                                  open the run's rerun recording (trials.rrd)",
         "  diagnose data=<file|folder> protocol=<name> [diagnosis.<field>=<value>] [units=<u>] [out=<dir>]",
         "                                                  units= of joint CSV/.mat data when not rad and",
@@ -56,6 +61,8 @@ def _usage() -> str:
         "  effects [protocol=<name>]                       list the catalogue of unmodelled effects",
         "  diagnose-benchmark [referee.<f>=<v>] [diagnosis.<f>=<v>] [out=<dir>]",
         "                                                  blind referee of the diagnosis",
+        "",
+        "every verb that writes takes out=<dir> (default: a new outputs/<protocol or verb>/<timestamp>)",
     ]
     for p in registry.protocols():
         for c in p.commands:
@@ -95,11 +102,16 @@ def _run(args: list[str]) -> int:
 
 
 def _estimate(args: list[str]) -> int:
+    from armlab.data.outdir import take_out
     from armlab.runner.run import format_table, reestimate
 
-    if not args:
-        return _fail("estimate needs a run directory: armlab estimate <run_dir> [<group>.<field>=<value>]")
-    out, results = reestimate(Path(args[0]), args[1:])
+    if not args or "=" in args[0]:
+        return _fail(
+            "estimate needs a run directory first: "
+            "armlab estimate <run_dir> [<group>.<field>=<value>] [out=<dir>]"
+        )
+    out, rest = take_out(args[1:], "estimate")
+    out, results = reestimate(Path(args[0]), rest, out=out)
     print(format_table(results))
     print(f"outputs: {out}")
     return 0
@@ -142,15 +154,17 @@ def _keyed(args: list[str], keys: tuple[str, ...], prefixes: tuple[str, ...]) ->
 
 
 def _diagnose(args: list[str]) -> int:
+    from armlab.data.outdir import default_out, take_out
     from armlab.diagnosis.report_text import format_summary
     from armlab.protocols import registry
-    from armlab.runner.diagnose import default_diagnosis_dir, run_diagnosis
+    from armlab.runner.diagnose import run_diagnosis
 
-    named, rest = _keyed(args, ("data", "protocol", "out", "units"), ("diagnosis",))
+    out, args = take_out(args, "diagnose")
+    named, rest = _keyed(args, ("data", "protocol", "units"), ("diagnosis",))
     missing = [k for k in ("data", "protocol") if not named.get(k)]
     if missing:
         return _fail(f"diagnose needs {missing}: armlab diagnose data=<file|folder> protocol=<name>")
-    out = Path(named["out"]) if named.get("out") else default_diagnosis_dir()
+    out = out or default_out("diagnose")
     if named["data"] == "published":  # the source paper's published figures as the measurement
         if named.get("units"):
             return _fail("data=published takes no units= (the published figures carry theirs)")
@@ -214,11 +228,12 @@ def _effects(args: list[str]) -> int:
 
 
 def _benchmark(args: list[str]) -> int:
-    from armlab.runner.diagnose import default_diagnosis_dir, run_benchmark
+    from armlab.data.outdir import default_out, take_out
+    from armlab.runner.diagnose import run_benchmark
 
-    named, rest = _keyed(args, ("out",), ("referee", "diagnosis"))
-    out = Path(named["out"]) if named.get("out") else default_diagnosis_dir("diagnose-benchmark")
-    out, summary = run_benchmark(rest, out)
+    out, args = take_out(args, "diagnose-benchmark")
+    _, rest = _keyed(args, (), ("referee", "diagnosis"))
+    out, summary = run_benchmark(rest, out or default_out("diagnose-benchmark"))
     print((out / "benchmark.md").read_text())
     print(f"outputs: {out}")
     return 0

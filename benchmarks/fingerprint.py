@@ -83,7 +83,7 @@ def collect(out: Path) -> dict:
     fp: dict = {"runs": {}, "referees": {}}
     for name, args in _RUNS.items():
         run_dir = out / "runs" / name
-        _armlab(["run", *args, f"hydra.run.dir={run_dir}"])
+        _armlab(["run", *args, f"out={run_dir}"])
         fp["runs"][name] = {
             "trials": _h5_hashes(run_dir / "trials.h5"),
             "results": _json_hash(run_dir / "results.json"),

@@ -42,9 +42,7 @@ def test_run_gives_the_cli_s_trials_and_results(registered, tmp_path):
     assert run.protocol == toy.NAME and run.dir == tmp_path / "api"
     assert (run.dir / ".hydra" / "config.yaml").is_file() and (run.dir / "results.json").is_file()
     cmd = [sys.executable, str(Path(toy.__file__)), "run", f"protocol={toy.NAME}", "seed=3"]
-    proc = subprocess.run(
-        [*cmd, f"hydra.run.dir={tmp_path / 'cli'}"], cwd=ROOT, capture_output=True, text=True
-    )
+    proc = subprocess.run([*cmd, f"out={tmp_path / 'cli'}"], cwd=ROOT, capture_output=True, text=True)
     assert proc.returncode == 0, proc.stderr
     assert _arrays(run.dir / "trials.h5") == _arrays(tmp_path / "cli" / "trials.h5")
     cli = json.loads((tmp_path / "cli" / "results.json").read_text())
@@ -63,7 +61,7 @@ def test_load_run_reads_a_complete_folder_and_refuses_an_unfinished_one(register
     assert again.results == json.loads(json.dumps(run.results, default=json_default))  # what run returned
     assert again.protocol == toy.NAME and again.config["seed"] == 1
     (run.dir / "results.json").unlink()
-    with pytest.raises(DataError, match=r"incomplete run .*armlab run resume=true hydra\.run\.dir="):
+    with pytest.raises(DataError, match=r"incomplete run .*armlab run resume=true out="):
         armlab.load_run(run.dir)
     with pytest.raises(DataError, match="holds no results.json"):
         armlab.load_run(tmp_path)  # not a run folder

@@ -204,10 +204,11 @@ RUN = [
     ("no-key", ["=3"], ["'=3' has no key", "key=value"]),
     ("unparsable-list", ["arm.q0=[0.1"], ["arm.q0=[0.1", "no viable alternative"]),
     ("unknown-launcher", ["hydra/launcher=nope"], ["hydra/launcher/nope", "joblib"]),
-    ("adding-hydra-key", ["+hydra.foo=1"], ["+hydra.foo=1", "adds none", "hydra.run.dir"]),
+    ("adding-hydra-key", ["+hydra.foo=1"], ["+hydra.foo=1", "adds none", "hydra/launcher=joblib"]),
     ("bad-bool", ["output.figures=maybe"], ["output.figures", "not a valid bool"]),
     ("unknown-option", ["--foo"], ["['--foo']", "--multirun"]),
-    ("empty-run-dir", ["hydra.run.dir="], ["hydra.run.dir=", "give a folder"]),
+    ("hydra-run-dir", ["hydra.run.dir=x"], ["out=x instead of hydra.run.dir", "every verb"]),
+    ("hydra-sweep-dir", ["-m", "seed=0,1", "hydra.sweep.dir=x"], ["out=x instead of hydra.sweep.dir"]),
     (
         "pair-of-one",
         ["protocol=fractional_elbow", "frf.band_hz=[1]"],
@@ -275,6 +276,12 @@ RUN = [
 
 OTHER = [
     ("estimate-no-dir", ["estimate"], ["estimate needs a run directory"]),
+    # one output convention (issue 21): every verb names its folder out=<dir>, the Hydra spelling is refused
+    ("estimate-out-not-empty", ["estimate", "{run}", "out={run}"], ["is not empty", "never overwrites"]),
+    ("estimate-hydra-dir", ["estimate", "{run}", "hydra.run.dir=x"], ["out=x instead of hydra.run.dir"]),
+    ("diagnose-hydra-dir", ["diagnose", "data={run}", "protocol=joint_1dof", "hydra.run.dir=x"], ["out=x"]),
+    ("fit-joint-hydra-dir", ["fit-joint", "{run}", "hydra.sweep.dir=x"], ["instead of hydra.sweep.dir"]),
+    ("benchmark-empty-out", ["diagnose-benchmark", "out="], ["diagnose-benchmark out=", "needs a folder"]),
     ("estimate-damaged-h5", ["estimate", "{bad_run}"], ["trials.h5: cannot be read", "damaged"]),
     ("estimate-unknown-protocol", ["estimate", "{other_run}"], ["protocol 'nope'", "valid"]),
     ("estimate-bad-arg", ["estimate", "{run}", "badarg"], ["'badarg'", "frf.<field>=<value>"]),
@@ -466,8 +473,7 @@ def _assert_refused(argv: list[str], words: list[str], capsys) -> str:
 
 @pytest.mark.parametrize(("argv", "words"), [pytest.param(a, w, id=i) for i, a, w in RUN])
 def test_run_is_refused_before_its_folder_exists(argv, words, tmp_path, capsys):
-    folder = "hydra.sweep.dir" if "-m" in argv else "hydra.run.dir"
-    _assert_refused(["run", *argv, f"{folder}={tmp_path / 'out'}"], words, capsys)
+    _assert_refused(["run", *argv, f"out={tmp_path / 'out'}"], words, capsys)
     assert not (tmp_path / "out").exists()  # refused before Hydra made the run folder
 
 
@@ -529,7 +535,7 @@ def test_a_reflex_slower_than_every_window_is_warned_once(capsys, tmp_path):
         compose(["reflex.stretch_latency_s=0.03"])  # acts inside the windows: no warning
     # through the CLI: one warning line, printed once although a sweep composes twice, then the
     # refusal of an effect this lab does not simulate
-    argv = ["run", "-m", *slow, "seed=0,1", "effects=[cable_drag]", f"hydra.sweep.dir={tmp_path / 's'}"]
+    argv = ["run", "-m", *slow, "seed=0,1", "effects=[cable_drag]", f"out={tmp_path / 's'}"]
     assert main(argv) == 2
     err = capsys.readouterr().err.splitlines()
     assert [line.split(":")[1] for line in err] == [" warning", " error"], err
@@ -599,9 +605,7 @@ def test_an_unforeseen_exception_is_one_line_and_debug_shows_it(monkeypatch, cap
 )
 def test_the_entry_point_prints_one_line(argv, words, files, tmp_path):
     names = {k: str(v) for k, v in files.items()}
-    argv = [a.format(**names) for a in argv] + (
-        ["hydra.run.dir=" + str(tmp_path / "r")] if argv[0] == "run" else []
-    )
+    argv = [a.format(**names) for a in argv] + (["out=" + str(tmp_path / "r")] if argv[0] == "run" else [])
     env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(REPO), os.environ.get("PYTHONPATH", "")])}
     env.pop("ARMLAB_DEBUG", None)
     exe = Path(sys.executable).with_name("armlab")
@@ -627,11 +631,12 @@ def test_help_of_every_verb_prints_the_usage(verb, capsys, tmp_path):
 @pytest.mark.parametrize(
     ("argv", "words"),
     [
-        (["hydra.run.dir={t}/a", "hydra.run.dir={t}/b"], ["hydra.run.dir is given twice"]),
-        (["hydra.run.dir=''"], ["hydra.run.dir=''", "give a folder"]),
-        (["hydra.run.dir="], ["hydra.run.dir=", "give a folder"]),
+        (["out={t}/a", "out={t}/b"], ["out= is given 2 times"]),
+        (["out=''"], ["armlab run out=", "needs a folder"]),
+        (["out="], ["armlab run out=", "needs a folder"]),
+        (["hydra.run.dir={t}/a"], ["instead of hydra.run.dir=", "every verb"]),
     ],
-    ids=["twice", "quoted-empty", "empty"],
+    ids=["twice", "quoted-empty", "empty", "hydra-spelling"],
 )
 def test_the_run_folder_is_given_once_and_not_empty(argv, words, tmp_path, capsys, monkeypatch):
     monkeypatch.chdir(tmp_path)  # an empty folder would be the working folder

@@ -99,7 +99,7 @@ def _armlab(*args: str, cwd: Path) -> subprocess.CompletedProcess:
 def small_run(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("cli")
     run_dir = tmp / "run"
-    proc = _armlab("run", *_SMALL, "seed=5", f"hydra.run.dir={run_dir}", cwd=tmp)
+    proc = _armlab("run", *_SMALL, "seed=5", f"out={run_dir}", cwd=tmp)
     assert proc.returncode == 0, proc.stderr
     return run_dir, proc
 
@@ -134,6 +134,28 @@ def test_estimate_reproduces_the_run_from_its_trial_file(small_run):
     assert json.loads((run_dir / "results.json").read_text())["windows"] == first
 
 
+def test_estimate_writes_into_the_folder_out_names_and_never_over_it(small_run, tmp_path):
+    run_dir, _ = small_run
+    target = tmp_path / "re, estimated"  # a comma and a space: a literal folder name
+    proc = _armlab("estimate", str(run_dir), f"out={target}", cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.strip().endswith(f"outputs: {target}") and (target / "results.json").is_file()
+    again = json.loads((target / "results.json").read_text())["windows"][-1]["K"]
+    np.testing.assert_allclose(again, json.loads((run_dir / "results.json").read_text())["windows"][-1]["K"])
+    before = (target / "results.json").read_bytes()
+    proc = _armlab("estimate", str(run_dir), f"out={target}", cwd=tmp_path)
+    assert proc.returncode == 2 and "is not empty" in proc.stderr
+    assert (target / "results.json").read_bytes() == before
+
+
+def test_run_without_out_writes_a_new_folder_under_outputs(tmp_path):
+    proc = _armlab("run", *_SMALL, cwd=tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    (folder,) = (tmp_path / "outputs" / "conditioning_window").iterdir()
+    assert proc.stdout.strip().endswith(f"outputs: {folder}")
+    assert (folder / "results.json").is_file()
+
+
 def test_estimate_rejects_unknown_estimator_field(small_run, capsys):
     run_dir, _ = small_run
     assert main(["estimate", str(run_dir), "estimator.nope=1"]) == 2
@@ -143,7 +165,7 @@ def test_estimate_rejects_unknown_estimator_field(small_run, capsys):
 @pytest.mark.parametrize("launcher", [[], ["hydra/launcher=joblib"]], ids=["basic", "joblib"])
 def test_multirun_sweeps_seeds_into_separate_directories(tmp_path, launcher):
     sweep = tmp_path / "sweep"
-    args = ["run", "--multirun", "seed=0,1", *_SMALL, *launcher, f"hydra.sweep.dir={sweep}"]
+    args = ["run", "--multirun", "seed=0,1", *_SMALL, *launcher, f"out={sweep}"]
     proc = _armlab(*args, cwd=tmp_path)
     assert proc.returncode == 0, proc.stderr
     runs = sorted(p for p in sweep.iterdir() if (p / "results.json").is_file())
@@ -167,7 +189,7 @@ def fractional_run(tmp_path_factory):
         "elbow.grasp_stiffness_N_per_m=2000",
         "elbow.grasp_damping_Ns_per_m=10",
     ]
-    proc = _armlab("run", *args, f"hydra.run.dir={run_dir}", cwd=tmp)
+    proc = _armlab("run", *args, f"out={run_dir}", cwd=tmp)
     assert proc.returncode == 0, proc.stderr
     return run_dir, proc
 

@@ -324,9 +324,7 @@ def _one_line_error(proc: subprocess.CompletedProcess, *needles: str) -> None:
 
 def test_cli_refuses_a_cuff_the_step_cannot_integrate_before_writing(tmp_path):
     run = tmp_path / "run"
-    proc = _armlab(
-        "run", "cuff.stiffness_N_per_m=1e7", "cuff.damping_Ns_per_m=0", f"hydra.run.dir={run}", cwd=tmp_path
-    )
+    proc = _armlab("run", "cuff.stiffness_N_per_m=1e7", "cuff.damping_Ns_per_m=0", f"out={run}", cwd=tmp_path)
     _one_line_error(proc, "cuff.stiffness_N_per_m=1e+07", "< 9.6e+06 N/m")
     assert not run.exists()  # refused before Hydra makes the run folder
 
@@ -334,7 +332,7 @@ def test_cli_refuses_a_cuff_the_step_cannot_integrate_before_writing(tmp_path):
 def test_cli_names_a_trial_that_diverges_and_writes_no_result(tmp_path):
     run = tmp_path / "run"
     off = ["output.recording=false", "output.figures=false"]
-    proc = _armlab("run", *TINY_COND, *NEAR_BOUND_CUFF, *off, f"hydra.run.dir={run}", cwd=tmp_path)
+    proc = _armlab("run", *TINY_COND, *NEAR_BOUND_CUFF, *off, f"out={run}", cwd=tmp_path)
     _one_line_error(proc, "conditioning_window trial ", "unstable at t = ", "cuff force", "1000 N bound")
     assert not (run / "results.json").exists() and not (run / "trials.h5").exists()
 
@@ -349,7 +347,7 @@ def test_cli_multirun_names_the_diverging_trial(tmp_path):
         *TINY_COND,
         *NEAR_BOUND_CUFF,
         *off,
-        f"hydra.sweep.dir={sweep}",
+        f"out={sweep}",
         cwd=tmp_path,
     )
     _one_line_error(proc, "conditioning_window trial ", "unstable at t = ", "cuff force")

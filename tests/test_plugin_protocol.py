@@ -52,7 +52,7 @@ def test_help_lists_the_registered_toy_and_forgets_it_after(registered, capsys):
 
 def test_run_estimate_recovers_the_plant(tmp_path):
     run_dir = tmp_path / "run"
-    proc = _cli("run", f"protocol={toy.NAME}", "seed=3", f"hydra.run.dir={run_dir}")
+    proc = _cli("run", f"protocol={toy.NAME}", "seed=3", f"out={run_dir}")
     assert proc.returncode == 0, proc.stderr
     results = json.loads((run_dir / "results.json").read_text())
     assert results["protocol"] == toy.NAME and (run_dir / "toy.txt").is_file()
@@ -73,14 +73,14 @@ def test_run_estimate_recovers_the_plant(tmp_path):
 
 
 def test_override_of_a_group_the_toy_does_not_read_is_refused(tmp_path):
-    proc = _cli("run", f"protocol={toy.NAME}", "arm.cocontraction=0.3", f"hydra.run.dir={tmp_path / 'r'}")
+    proc = _cli("run", f"protocol={toy.NAME}", "arm.cocontraction=0.3", f"out={tmp_path / 'r'}")
     assert proc.returncode == 2
     assert f"'arm' is not read by protocol '{toy.NAME}'" in proc.stderr and "'plant'" in proc.stderr
     assert not (tmp_path / "r").exists()
 
 
 def test_effects_it_does_not_simulate_are_refused(tmp_path):
-    proc = _cli("run", f"protocol={toy.NAME}", "effects=[reflex]", f"hydra.run.dir={tmp_path / 'r'}")
+    proc = _cli("run", f"protocol={toy.NAME}", "effects=[reflex]", f"out={tmp_path / 'r'}")
     assert proc.returncode == 2
     assert f"effects ['reflex'] are not simulated by protocol '{toy.NAME}'" in proc.stderr
 
@@ -88,7 +88,7 @@ def test_effects_it_does_not_simulate_are_refused(tmp_path):
 @pytest.mark.parametrize(("delay_s", "verdict"), [(0.0, ["none"]), (0.003, ["channel_delay"])])
 def test_diagnose_through_the_generic_core(tmp_path, delay_s, verdict):
     run_dir = tmp_path / "run"
-    proc = _cli("run", f"protocol={toy.NAME}", f"push.force_delay_s={delay_s}", f"hydra.run.dir={run_dir}")
+    proc = _cli("run", f"protocol={toy.NAME}", f"push.force_delay_s={delay_s}", f"out={run_dir}")
     assert proc.returncode == 0, proc.stderr
     out = tmp_path / "diag"
     proc = _cli("diagnose", f"data={run_dir}", f"protocol={toy.NAME}", f"out={out}")

@@ -95,7 +95,7 @@ def test_each_protocol_composes_only_its_own_groups(name):
 
 
 def test_foreign_group_on_the_command_line_names_the_protocols_groups(capsys, tmp_path):
-    args = ["run", "protocol=conditioning_window", "frf.welch_window=5000", f"hydra.run.dir={tmp_path / 'r'}"]
+    args = ["run", "protocol=conditioning_window", "frf.welch_window=5000", f"out={tmp_path / 'r'}"]
     assert main(args) == 2
     err = capsys.readouterr().err
     assert "'frf' is not read by protocol 'conditioning_window'; its groups: ['sim', 'sensors'" in err
@@ -126,7 +126,7 @@ def test_an_effect_the_lab_does_not_simulate_is_refused_not_ignored(capsys, tmp_
     _, exp = compose(["protocol=conditioning_window", "effects=[joint_friction]"])
     check_effects(registry.get("conditioning_window"), exp)  # applied by the lab: accepted
     assert exp.effects.joint_friction == EFFECTS["joint_friction"]()
-    args = ["run", "effects=[reflex]", f"hydra.run.dir={tmp_path / 'r'}"]
+    args = ["run", "effects=[reflex]", f"out={tmp_path / 'r'}"]
     assert main(args) == 2  # refused before anything is written
     assert "switch them with reflex.enabled" in capsys.readouterr().err and not (tmp_path / "r").exists()
 

@@ -94,7 +94,7 @@ def _wait_for(path: Path, proc: subprocess.Popen, timeout_s: float = 120.0) -> N
 def toy_run(tmp_path_factory) -> Path:
     """One complete, uninterrupted toy run (seed 3): the reference of the resumed ones."""
     run_dir = tmp_path_factory.mktemp("resume") / "ref"
-    proc = _toy_cli("run", *TOY, f"hydra.run.dir={run_dir}")
+    proc = _toy_cli("run", *TOY, f"out={run_dir}")
     assert proc.returncode == 0, proc.stderr
     return run_dir
 
@@ -122,7 +122,7 @@ def test_refused_rerun_leaves_every_file_byte_identical(toy_run, tmp_path):
     shutil.copytree(toy_run, run_dir)
     before = _snapshot(run_dir)
     assert {".hydra/config.yaml", ".hydra/hydra.yaml", ".hydra/overrides.yaml"} <= set(before)
-    proc = _toy_cli("run", f"protocol={toy.NAME}", "seed=5", f"hydra.run.dir={run_dir}")
+    proc = _toy_cli("run", f"protocol={toy.NAME}", "seed=5", f"out={run_dir}")
     assert proc.returncode == 2
     assert proc.stderr.count("\n") == 1 and "already holds results.json" in proc.stderr
     assert "resume=true" in proc.stderr and "Traceback" not in proc.stderr
@@ -133,7 +133,7 @@ def test_resume_leaves_a_complete_run_untouched(toy_run, tmp_path, registered, c
     run_dir = tmp_path / "run"
     shutil.copytree(toy_run, run_dir)
     before = _snapshot(run_dir)
-    assert main(["run", "resume=true", f"hydra.run.dir={run_dir}"]) == 0
+    assert main(["run", "resume=true", f"out={run_dir}"]) == 0
     assert "left untouched" in capsys.readouterr().out
     assert _snapshot(run_dir) == before
 
@@ -141,10 +141,10 @@ def test_resume_leaves_a_complete_run_untouched(toy_run, tmp_path, registered, c
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        (["resume=yes", "hydra.run.dir=/nonexistent"], "resume=true or resume=false"),
-        (["resume=true", "resume=false", "hydra.run.dir=/nonexistent"], "give it once"),
-        (["resume=true", *TOY], "resume=true needs the folder to finish: add hydra.run.dir=<folder>"),
-        (["--multirun", "resume=true", "seed=0,1"], "add hydra.sweep.dir=<folder>"),
+        (["resume=yes", "out=/nonexistent"], "resume=true or resume=false"),
+        (["resume=true", "resume=false", "out=/nonexistent"], "give it once"),
+        (["resume=true", *TOY], "resume=true needs the folder to finish: add out=<folder>"),
+        (["--multirun", "resume=true", "seed=0,1"], "add out=<sweep_folder>"),
     ],
 )
 def test_bad_resume_arguments_are_refused(args, message, registered, capsys):
@@ -155,7 +155,7 @@ def test_bad_resume_arguments_are_refused(args, message, registered, capsys):
 
 def test_resume_with_other_overrides_than_the_folders_is_refused(incomplete, registered, capsys):
     before = _snapshot(incomplete)
-    assert main(["run", "resume=true", f"protocol={toy.NAME}", "seed=4", f"hydra.run.dir={incomplete}"]) == 2
+    assert main(["run", "resume=true", f"protocol={toy.NAME}", "seed=4", f"out={incomplete}"]) == 2
     err = capsys.readouterr().err
     assert "was started as protocol=toy_msd with overrides ['seed=3']" in err
     assert _snapshot(incomplete) == before
@@ -165,7 +165,7 @@ def test_resume_with_other_overrides_than_the_folders_is_refused(incomplete, reg
 @pytest.mark.parametrize(
     "verb",
     [
-        ["run", f"protocol={toy.NAME}", "seed=3", "hydra.run.dir={d}"],
+        ["run", f"protocol={toy.NAME}", "seed=3", "out={d}"],
         ["estimate", "{d}"],
         ["view", "{d}"],
         ["diagnose", "data={d}", f"protocol={toy.NAME}", "out={d}_diag"],
@@ -178,7 +178,7 @@ def test_every_verb_recognises_an_incomplete_folder(verb, incomplete, registered
     assert main([a.format(d=incomplete) for a in verb]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "is an incomplete run (no results.json" in err
-    assert f"armlab run resume=true hydra.run.dir={incomplete}" in err
+    assert f"armlab run resume=true out={incomplete}" in err
     assert _snapshot(incomplete) == before and not Path(f"{incomplete}_diag").exists()
 
 
@@ -198,9 +198,9 @@ def test_partial_files_keep_the_metadata_and_log(incomplete):
 @pytest.mark.parametrize(
     "argv",
     [
-        ["run", "resume=true", "hydra.run.dir={d}"],
-        ["run", "hydra.run.dir={d}"],
-        ["run", "--multirun", "resume=true", "seed=0,1", "hydra.sweep.dir={p}"],
+        ["run", "resume=true", "out={d}"],
+        ["run", "out={d}"],
+        ["run", "--multirun", "resume=true", "seed=0,1", "out={p}"],
     ],
     ids=["resume", "run", "sweep-resume"],
 )
@@ -225,7 +225,7 @@ def test_a_folder_of_the_users_own_files_is_never_written_into_nor_cleaned(argv,
 # --- resume ----------------------------------------------------------------------------------------
 def test_resume_finishes_an_incomplete_run_identically(toy_run, incomplete):
     hydra_before = {k: v for k, v in _snapshot(incomplete).items() if k.startswith(".hydra")}
-    proc = _toy_cli("run", "resume=true", f"hydra.run.dir={incomplete}")  # its own overrides
+    proc = _toy_cli("run", "resume=true", f"out={incomplete}")  # its own overrides
     assert proc.returncode == 0, proc.stderr
     _same_run(toy_run, incomplete)
     assert not _temporaries(incomplete)
@@ -234,15 +234,15 @@ def test_resume_finishes_an_incomplete_run_identically(toy_run, incomplete):
 
 def test_sigterm_mid_run_leaves_no_temporary_and_resume_finishes_it(toy_run, tmp_path):
     run_dir = tmp_path / "run"
-    proc = _toy_cli("run", *TOY, f"hydra.run.dir={run_dir}", wait=False)
+    proc = _toy_cli("run", *TOY, f"out={run_dir}", wait=False)
     _wait_for(run_dir / ".hydra" / "overrides.yaml", proc)  # written just before simulating
     proc.send_signal(signal.SIGTERM)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 128 + signal.SIGTERM, err
     assert "interrupted (SIGTERM)" in err and "Traceback" not in err and err.count("\n") == 1
-    assert f"`armlab run resume=true hydra.run.dir={run_dir}`" in err
+    assert f"`armlab run resume=true out={run_dir}`" in err
     assert run_state(run_dir) == "incomplete" and not _temporaries(run_dir)
-    done = _toy_cli("run", "resume=true", f"hydra.run.dir={run_dir}")
+    done = _toy_cli("run", "resume=true", f"out={run_dir}")
     assert done.returncode == 0, done.stderr
     _same_run(toy_run, run_dir)
 
@@ -251,24 +251,24 @@ def test_interrupted_sweep_resumes_to_the_uninterrupted_results(tmp_path):
     """The issue's case: a 3-job multirun stopped by SIGTERM mid-job, then resumed."""
     sweep = ["--multirun", f"protocol={toy.NAME}", "seed=0,1,2"]
     ref = tmp_path / "ref"
-    proc = _toy_cli("run", *sweep, f"hydra.sweep.dir={ref}")
+    proc = _toy_cli("run", *sweep, f"out={ref}")
     assert proc.returncode == 0, proc.stderr
     run = tmp_path / "run"
-    proc = _toy_cli("run", *sweep, f"hydra.sweep.dir={run}", wait=False)
+    proc = _toy_cli("run", *sweep, f"out={run}", wait=False)
     _wait_for(run / "1" / ".hydra" / "overrides.yaml", proc)  # job 0 done, job 1 simulating
     proc.send_signal(signal.SIGTERM)
     _, err = proc.communicate(timeout=60)
     assert proc.returncode == 128 + signal.SIGTERM
-    assert f"`armlab run --multirun resume=true hydra.sweep.dir={run} <same sweep>`" in err
+    assert f"`armlab run --multirun resume=true out={run} <same sweep>`" in err
     assert run_state(run / "0") == "complete" and run_state(run / "1") == "incomplete"
     assert not (run / "2").exists() and not _temporaries(run)
     finished = _snapshot(run / "0")
     sweep_record = (run / "multirun.yaml").read_bytes()
     # without resume=true the whole sweep is refused up front, naming its jobs; nothing changes
-    refused = _toy_cli("run", *sweep, f"hydra.sweep.dir={run}")
+    refused = _toy_cli("run", *sweep, f"out={run}")
     assert refused.returncode == 2 and refused.stderr.count("\n") == 1
     assert "complete: ['0'], incomplete: ['1']" in refused.stderr and "resume=true" in refused.stderr
-    resumed = _toy_cli("run", "resume=true", *sweep, f"hydra.sweep.dir={run}")
+    resumed = _toy_cli("run", "resume=true", *sweep, f"out={run}")
     assert resumed.returncode == 0, resumed.stderr
     assert f"{run / '0'} is complete (results.json); left untouched" in resumed.stdout
     assert _snapshot(run / "0") == finished and (run / "multirun.yaml").read_bytes() == sweep_record
@@ -281,16 +281,16 @@ def test_joblib_sweep_interrupted_resumes_bit_identical_to_a_serial_one(tmp_path
     """Same seed, serial or joblib, interrupted or not: bit-identical trials (~20 s)."""
     sweep = ["--multirun", "seed=0,1,2", *SMALL]
     serial = tmp_path / "serial"
-    assert _armlab("run", *sweep, f"hydra.sweep.dir={serial}").returncode == 0
+    assert _armlab("run", *sweep, f"out={serial}").returncode == 0
     run = tmp_path / "joblib"
-    proc = _armlab("run", *sweep, "hydra/launcher=joblib", f"hydra.sweep.dir={run}", wait=False)
+    proc = _armlab("run", *sweep, "hydra/launcher=joblib", f"out={run}", wait=False)
     _wait_for(run / "1" / ".hydra" / "overrides.yaml", proc)
     proc.send_signal(signal.SIGTERM)
     proc.communicate(timeout=60)
     assert proc.returncode == 128 + signal.SIGTERM
     assert run_state(run / "1") == "incomplete"
     # no sweep given: the one stored in multirun.yaml is reused
-    resumed = _armlab("run", "--multirun", "resume=true", "hydra/launcher=joblib", f"hydra.sweep.dir={run}")
+    resumed = _armlab("run", "--multirun", "resume=true", "hydra/launcher=joblib", f"out={run}")
     assert resumed.returncode == 0, resumed.stderr
     for job in ("0", "1", "2"):
         _same_run(serial / job, run / job)
@@ -451,7 +451,7 @@ def test_a_sweep_combination_checked_only_in_its_job_is_refused_there(tmp_path):
             "output.recording=false",
             "output.figures=false",
             "output.print_table=false",
-            f"hydra.sweep.dir={sweep}",
+            f"out={sweep}",
         ],
         capture_output=True,
         text=True,

@@ -57,19 +57,19 @@ def refusal(folder: str | Path, state: RunState) -> DataError:
     if state == "complete":
         return DataError(
             f"{folder} already holds {MARKER}: a complete run is never touched, armlab never overwrites "
-            "a run — choose a new hydra.run.dir (or hydra.sweep.dir), or add resume=true to leave "
+            "a run — choose a new out=<folder>, or add resume=true to leave "
             "complete runs untouched and finish incomplete ones"
         )
     if state == "incomplete":
         return DataError(
             f"{folder} is an incomplete run (no {MARKER}: it was interrupted or failed); finish it "
-            f"with `{resume_command(folder)}`, or choose a new hydra.run.dir"
+            f"with `{resume_command(folder)}`, or choose a new out=<folder>"
         )
     if state == "foreign":
         return DataError(
             f"{folder} is not empty and is not an armlab run folder (no .hydra/config.yaml, no "
             "scene.xml): armlab never writes into it nor removes anything from it — choose a new "
-            "hydra.run.dir (or hydra.sweep.dir)"
+            "out=<folder>"
         )
     raise ValueError(f"a {state!r} folder needs no refusal")
 
@@ -80,7 +80,7 @@ def _is_log(p: Path) -> bool:
 
 def resume_command(folder: str | Path) -> str:
     """The command line that finishes the incomplete run in ``folder`` (its stored overrides)."""
-    return f"armlab run resume=true hydra.run.dir={Path(folder)}"
+    return f"armlab run resume=true out={Path(folder)}"
 
 
 def _is_run_folder(folder: Path) -> bool:

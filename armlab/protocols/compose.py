@@ -61,8 +61,8 @@ def _check(protocol: Protocol, overrides: list[str]) -> None:
         top = bare.split(".", 1)[0]
         if key.startswith("+") and (top == "hydra" or top.startswith("hydra/")):
             raise ConfigError(
-                f"{item}: armlab sets Hydra's existing settings and groups (e.g. hydra.run.dir=<dir>, "
-                f"hydra.sweep.dir=<dir>, hydra/launcher=joblib) but adds none; drop the '+'"
+                f"{item}: armlab sets Hydra's existing settings and groups (e.g. hydra/launcher=joblib, "
+                f"hydra.launcher.n_jobs=2) but adds none; drop the '+'"
             )
         if bare in ("hydra.run.dir", "hydra.sweep.dir") and not value.strip().strip("'\"").strip():
             raise ConfigError(
@@ -176,7 +176,7 @@ def compose(overrides: list[str]):
             cfg = hydra_compose(
                 config_name=protocol.name, overrides=[o for o in rest if o not in hydra_items]
             )
-            if hydra_items:  # Hydra's own settings and groups (hydra/launcher=joblib, hydra.run.dir=...)
+            if hydra_items:  # Hydra's own settings and groups (hydra/launcher=joblib, the run folder)
                 hydra_compose(config_name=protocol.name, overrides=hydra_items, return_hydra_config=True)
     except (HydraException, OmegaConfBaseException) as exc:
         raise ConfigError(_hydra_message(exc, rest)) from None

@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import time
 from dataclasses import replace
-from datetime import datetime
 from pathlib import Path
 
 import numpy as np
@@ -24,18 +23,10 @@ from armlab.protocols import registry
 from armlab.protocols._files import check_new_dir, new_dir, write_json, write_new
 
 __all__ = [
-    "default_diagnosis_dir",
     "run_benchmark",
     "run_diagnosis",
     "run_diagnoser",
 ]
-
-_ROOT = Path(__file__).resolve().parents[2]
-
-
-def default_diagnosis_dir(kind: str = "diagnose") -> Path:
-    """``outputs/<kind>/<timestamp with microseconds>`` under the repository root."""
-    return _ROOT / "outputs" / kind / datetime.now().strftime("%Y-%m-%d_%H-%M-%S-%f")
 
 
 def run_diagnoser(

@@ -79,7 +79,7 @@ def sweep_values(overrides: list[str]) -> list[list[str]]:
 
 
 def launch(args: list[str]) -> int:
-    """``armlab run [--multirun] [resume=true] <overrides>``; returns the exit status.
+    """``armlab run [--multirun] [resume=true] [out=<dir>] <overrides>``; returns the exit status.
 
     Raises:
         ConfigError: a bad option or override (before Hydra makes any folder).
@@ -87,6 +87,7 @@ def launch(args: list[str]) -> int:
     import hydra
 
     from armlab.config.store import CONFIG_DIR
+    from armlab.data.outdir import hydra_out, take_out
     from armlab.data.rundir import resume_command
     from armlab.protocols.compose import check_effects, split_protocol
     from armlab.protocols.compose import compose as compose_protocol
@@ -106,6 +107,9 @@ def launch(args: list[str]) -> int:
         )
     resume = flags == ["true"]
     overrides = [a for a in overrides if a.partition("=")[0] != "resume"]
+    out, overrides = take_out(overrides, "run")  # one convention: out=<dir> (the sweep folder of a multirun)
+    if out is not None:
+        overrides.append(hydra_out(out, multirun=multirun))
     overrides, note = plan_launch(overrides, multirun=multirun, resume=resume)
     if note is not None:
         print(note)
@@ -153,7 +157,7 @@ def launch(args: list[str]) -> int:
     except interrupt.Interrupted as exc:
         if multirun:
             where = sweep or "<sweep folder>"
-            fix = f"armlab run --multirun resume=true hydra.sweep.dir={where} <same sweep>"
+            fix = f"armlab run --multirun resume=true out={where} <same sweep>"
         else:
             fix = resume_command(started[-1] if started else "<run folder>")
         print(

@@ -121,7 +121,8 @@ def plan_launch(overrides: list[str], *, multirun: bool, resume: bool) -> tuple[
     folder = given_folder(overrides, key)
     if folder is None:
         if resume:
-            raise DataError(f"resume=true needs the folder to finish: add {key}=<folder>")
+            what = "sweep folder" if multirun else "folder"
+            raise DataError(f"resume=true needs the {what} to finish: add out=<{what.replace(' ', '_')}>")
         return overrides, None  # a fresh timestamped folder
     if multirun:
         jobs = sweep_jobs(folder)
@@ -132,7 +133,7 @@ def plan_launch(overrides: list[str], *, multirun: bool, resume: bool) -> tuple[
                 f"sweep folder {folder} already holds jobs (complete: {jobs['complete']}, incomplete: "
                 f"{jobs['incomplete']}); armlab never overwrites a run — add resume=true to run only the "
                 "missing and incomplete jobs (complete ones are left untouched), or choose a new "
-                "hydra.sweep.dir"
+                "out=<folder>"
             )
         stored_file = folder / "multirun.yaml"
         stored = None

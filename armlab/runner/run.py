@@ -30,7 +30,7 @@ from armlab.data.rundir import (
 from armlab.data.trial import TrialSet
 from armlab.errors import ConfigError, DataError
 from armlab.protocols import registry
-from armlab.protocols._files import write_json, write_new
+from armlab.protocols._files import check_new_dir, new_dir, write_json, write_new
 from armlab.protocols.base import OutputContext
 from armlab.protocols.compose import check_effects
 
@@ -113,21 +113,25 @@ def run_protocol(cfg: ExperimentConfig, out_dir: Path, config_yaml: str = "") ->
     return results
 
 
-def reestimate(run_dir: Path, overrides: list[str] | None = None) -> tuple[Path, dict]:
+def reestimate(
+    run_dir: Path, overrides: list[str] | None = None, out: Path | None = None
+) -> tuple[Path, dict]:
     """Re-run the estimation on a run's saved ``trials.h5`` without simulating again.
 
     The settings come from the run's stored config, updated by overrides of the protocol's
     re-estimation group (``<group>.<field>=<value>``; the group is the protocol's
-    ``reestimate_group``). Results go to a new ``reestimate_<timestamp>/`` directory inside the run
-    directory, with ``overrides.yaml`` (the overrides given) and ``config.yaml`` (the stored
-    config they were applied to); ``results.json`` (written last) repeats both under
-    ``"reestimate"``.
+    ``reestimate_group``). Results go to ``out`` (new or empty; ``out=`` of ``armlab estimate``) or
+    by default to a new ``reestimate_<timestamp>/`` directory inside the run directory, with
+    ``overrides.yaml`` (the overrides given) and ``config.yaml`` (the stored config they were applied
+    to); ``results.json`` (written last) repeats both under ``"reestimate"``.
     """
     run_dir = Path(run_dir)
     path = run_dir / "trials.h5"
     require_complete(run_dir)
     if not path.is_file():
         raise DataError(f"{run_dir} has no trials.h5; give a run directory made by `armlab run`")
+    if out is not None:
+        check_new_dir(out)  # before reading the trials: a refused folder costs nothing
     trials = read_trials(path)
     stored = OmegaConf.create(trials.attrs.get("config_yaml") or "{}")
     name = str(trials.attrs.get("protocol", registry.DEFAULT_PROTOCOL))
@@ -137,8 +141,7 @@ def reestimate(run_dir: Path, overrides: list[str] | None = None) -> tuple[Path,
         raise DataError(f"{path} holds trials of protocol {name!r}: {exc}") from None
     overrides = list(overrides or [])
     results = protocol.reestimate(trials, stored, overrides)
-    out = run_dir / f"reestimate_{datetime.now():%Y-%m-%d_%H-%M-%S-%f}"
-    out.mkdir()
+    out = new_dir(out if out is not None else run_dir / f"reestimate_{datetime.now():%Y-%m-%d_%H-%M-%S-%f}")
     write_new(out / "overrides.yaml", OmegaConf.to_yaml(overrides))
     write_new(out / "config.yaml", OmegaConf.to_yaml(stored))
     results["reestimate"] = {"run": str(run_dir), "trials": str(path), "overrides": overrides}

@@ -8,7 +8,6 @@ docs/results_schema.md), ``table.txt`` (the printed table) and ``bode_impedance.
 
 from __future__ import annotations
 
-from datetime import datetime
 from pathlib import Path
 
 from omegaconf import OmegaConf
@@ -16,12 +15,12 @@ from omegaconf import OmegaConf
 from armlab.config.schema import FrfConfig
 from armlab.config.store import apply_overrides
 from armlab.data.joint_import import load_joint_data
+from armlab.data.outdir import default_out, take_out
 from armlab.errors import ConfigError
 from armlab.protocols._files import check_new_dir, write_json, write_new
 from armlab.protocols.joint_1dof.frf import JOINT_BAND_HZ, fit_joint_frf
 
 __all__ = [
-    "default_out_dir",
     "fit_joint_recordings",
     "format_joint_table",
     "joint_frf_config",
@@ -95,20 +94,15 @@ def format_joint_table(results: dict) -> str:
     return "\n".join(lines)
 
 
-def default_out_dir() -> Path:
-    return Path("outputs") / "joint_frf" / f"{datetime.now():%Y-%m-%d_%H-%M-%S-%f}"
-
-
 def run_fit_joint(args: list[str], viz) -> int:
     """``armlab fit-joint <csv|mat|folder> [frf.<field>=<value>] [units=<u>] [out=<dir>]``."""
     if not args or "=" in args[0]:
         raise ConfigError("fit-joint needs a CSV file or folder: armlab fit-joint <csv|folder> [frf.<f>=<v>]")
-    out = default_out_dir()
+    out, items = take_out(args[1:], "fit-joint")
+    out = out or default_out("fit-joint")
     rest, units = [], None
-    for item in args[1:]:
-        if item.startswith("out="):
-            out = Path(item.partition("=")[2])
-        elif item.startswith("units="):
+    for item in items:
+        if item.startswith("units="):
             units = item.partition("=")[2]
         else:
             rest.append(item)
