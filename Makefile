@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 
-.PHONY: setup run test test-all bench lint clean-venv
+.PHONY: setup run test test-all ci-sweep bench lint clean-venv
 
 $(STAMP): pyproject.toml
 	$(PY) -m venv $(VENV)
@@ -23,6 +23,12 @@ test: $(STAMP)
 
 test-all: $(STAMP)
 	$(BIN)/python -m pytest -q -m "slow or not slow"
+
+# the observation-window sweep CI gates on (.ci/window_sweep.py; docs/ci_window_sweep.md), then
+# the proof that the gate fails on an estimator broken on purpose
+ci-sweep: $(STAMP)
+	$(BIN)/python .ci/window_sweep.py
+	$(BIN)/python -m pytest -q -m slow tests/test_window_sweep.py
 
 bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_protocol.py
