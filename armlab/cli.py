@@ -9,6 +9,9 @@
     armlab view <run_dir>                                open the run's rerun recording
     armlab fit-joint <csv|folder> [frf.<f>=<v>] [out=<dir>]  FRF + Levy fits of real joint recordings
 
+Every verb takes ``progress=false``: no progress display (by default long work shows one on a
+terminal and log lines elsewhere; :mod:`armlab.runner.progress`).
+
 Bad input is reported on one line (``armlab: error: ...``, exit status 2), never as a traceback.
 """
 
@@ -56,6 +59,8 @@ def _usage() -> str:
         "  effects [protocol=<name>]                       list the catalogue of unmodelled effects",
         "  diagnose-benchmark [referee.<f>=<v>] [diagnosis.<f>=<v>] [out=<dir>]",
         "                                                  blind referee of the diagnosis",
+        "  <verb> ... progress=false                       no progress display (default: live on a",
+        "                                                  terminal, log lines on stderr otherwise)",
     ]
     for p in registry.protocols():
         for c in p.commands:
@@ -88,18 +93,20 @@ def compose(overrides: list[str]):
     return compose_protocol(overrides)
 
 
-def _run(args: list[str]) -> int:
+def _run(args: list[str], show: bool) -> int:
     from armlab.runner.launch import launch
 
-    return launch(args)
+    return launch(args, progress=show)
 
 
-def _estimate(args: list[str]) -> int:
+def _estimate(args: list[str], show: bool) -> int:
+    from armlab.runner.progress import display
     from armlab.runner.run import format_table, reestimate
 
     if not args:
         return _fail("estimate needs a run directory: armlab estimate <run_dir> [<group>.<field>=<value>]")
-    out, results = reestimate(Path(args[0]), args[1:])
+    with display(show):
+        out, results = reestimate(Path(args[0]), args[1:])
     print(format_table(results))
     print(f"outputs: {out}")
     return 0
@@ -141,10 +148,11 @@ def _keyed(args: list[str], keys: tuple[str, ...], prefixes: tuple[str, ...]) ->
     return named, rest
 
 
-def _diagnose(args: list[str]) -> int:
+def _diagnose(args: list[str], show: bool) -> int:
     from armlab.diagnosis.report_text import format_summary
     from armlab.protocols import registry
     from armlab.runner.diagnose import default_diagnosis_dir, run_diagnosis
+    from armlab.runner.progress import display
 
     named, rest = _keyed(args, ("data", "protocol", "out", "units"), ("diagnosis",))
     missing = [k for k in ("data", "protocol") if not named.get(k)]
@@ -154,11 +162,13 @@ def _diagnose(args: list[str]) -> int:
     if named["data"] == "published":  # the source paper's published figures as the measurement
         if named.get("units"):
             return _fail("data=published takes no units= (the published figures carry theirs)")
-        return _diagnose_published(named["protocol"], rest, out)
+        with display(show):
+            return _diagnose_published(named["protocol"], rest, out)
     registry.get(named["protocol"], need="diagnose")
-    out, results = run_diagnosis(
-        Path(named["data"]), named["protocol"], rest, out, units=named.get("units") or None
-    )
+    with display(show):
+        out, results = run_diagnosis(
+            Path(named["data"]), named["protocol"], rest, out, units=named.get("units") or None
+        )
     print(format_summary(results))
     print(f"outputs: {out}")
     return 0
@@ -213,12 +223,14 @@ def _effects(args: list[str]) -> int:
     return 0
 
 
-def _benchmark(args: list[str]) -> int:
+def _benchmark(args: list[str], show: bool) -> int:
     from armlab.runner.diagnose import default_diagnosis_dir, run_benchmark
+    from armlab.runner.progress import display
 
     named, rest = _keyed(args, ("out",), ("referee", "diagnosis"))
     out = Path(named["out"]) if named.get("out") else default_diagnosis_dir("diagnose-benchmark")
-    out, summary = run_benchmark(rest, out)
+    with display(show):
+        out, summary = run_benchmark(rest, out)
     print((out / "benchmark.md").read_text())
     print(f"outputs: {out}")
     return 0
@@ -273,20 +285,30 @@ def _main(argv: list[str] | None = None) -> int:
         print(_usage())  # also `armlab <verb> --help`
         return 0
     verb, rest = args[0], args[1:]
-    handlers = {
-        "run": _run,
-        "estimate": _estimate,
-        "view": _view,
-        "diagnose": _diagnose,
-        "effects": _effects,
-        "diagnose-benchmark": _benchmark,
-    }
     from armlab import viz
     from armlab.protocols import registry
+    from armlab.runner.progress import display, split_flag
+
+    show, rest = split_flag(rest)  # progress=true|false, taken by every verb
+    handlers = {
+        "run": lambda rest: _run(rest, show),
+        "estimate": lambda rest: _estimate(rest, show),
+        "view": _view,
+        "diagnose": lambda rest: _diagnose(rest, show),
+        "effects": _effects,
+        "diagnose-benchmark": lambda rest: _benchmark(rest, show),
+    }
+
+    def command_handler(run):
+        def handle(rest: list[str]) -> int:
+            with display(show):  # a protocol's verb reports through armlab.progress like the others
+                return run(rest, viz)
+
+        return handle
 
     for protocol in registry.protocols():  # verbs that protocols bring (e.g. fit-joint)
         for command in protocol.commands:
-            handlers[command.name] = lambda rest, run=command.run: run(rest, viz)
+            handlers[command.name] = command_handler(command.run)
     if verb not in handlers:
         return _fail(f"unknown verb {verb!r}; valid: {list(handlers)} (see armlab --help)")
     try:
