@@ -104,7 +104,8 @@ class LineSink:
     def advance(self, n: float = 1) -> None:
         self._done += n
         now = self._clock()
-        if self._name is None or now - self._last < self._every:
+        finished = self._total is not None and self._done >= self._total  # its end line follows
+        if self._name is None or finished or now - self._last < self._every:
             return
         self._last = now
         elapsed = now - self._t0
