@@ -69,6 +69,8 @@ def test_log_lines_are_throttled_and_estimate_what_is_left():
     for _ in range(12):  # 60 trials a second
         clock.t += 1.0
         sink.advance(60)
+    clock.t += 5.0
+    sink.advance(59.7)  # a lock-step rollout's fraction: whole trials shown, never rounded up
     clock.t += 0.5
     sink.stage("outputs")  # size unknown
     clock.t += 2.0
@@ -76,9 +78,10 @@ def test_log_lines_are_throttled_and_estimate_what_is_left():
     assert stream.getvalue().splitlines() == [
         "armlab [job 2]: simulate 300/780 trials, 5.0 s elapsed, ~8 s left",
         "armlab [job 2]: simulate 600/780 trials, 10.0 s elapsed, ~3 s left",
-        "armlab [job 2]: simulate 720/780 trials, done in 12.5 s",
+        "armlab [job 2]: simulate 779/780 trials, 17.0 s elapsed, ~0 s left",
+        "armlab [job 2]: simulate 779/780 trials, done in 17.5 s",
         "armlab [job 2]: outputs, done in 2.0 s",
-        "armlab [job 2]: finished in 14.5 s",
+        "armlab [job 2]: finished in 19.5 s",
     ]
 
 

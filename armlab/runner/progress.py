@@ -15,6 +15,7 @@ only observes: results are the same with it, without it and with ``progress=fals
 
 from __future__ import annotations
 
+import math
 import sys
 import time
 from collections.abc import Callable, Iterator
@@ -57,7 +58,10 @@ def _count(done: float, total: float | None, unit: str) -> str:
     """``120/780 trials``; ``12 cases`` of a stage of unknown size; empty where nothing is counted."""
     if total is None and done == 0:
         return ""
-    text = f"{done:.0f}" if total is None else f"{done:.0f}/{total:.0f}"
+    # whole items done, never rounded up (lock-step rollouts report fractions of their trials);
+    # 1e-6 absorbs the round-off of summing those fractions
+    whole = math.floor(done + 1e-6)
+    text = f"{whole}" if total is None else f"{whole}/{total:.0f}"
     return f"{text} {unit}".rstrip()
 
 
