@@ -143,7 +143,7 @@ def simulate_capstan(
     data = [mujoco.MjData(model) for _ in range(min(nthread, n_trials))]
     state = np.tile(np.asarray(initial_state, float), (n_trials, 1))
     sd_out = np.empty((n_trials, n_samples, model.nsensordata))
-    progress.stage("simulate", n_trials, "trials")  # in step: n_trials * c1 / n_steps after a chunk
+    progress.stage("simulate", n_trials, "trials")  # lock-step: n_trials * c1 / n_steps after a chunk
     with mj_rollout.Rollout(nthread=len(data)) as runner:
         for c0 in range(0, n_steps, _CHUNK_STEPS):
             steps = np.arange(c0, min(n_steps, c0 + _CHUNK_STEPS)) - n_settle  # 0 at the first sample
