@@ -10,7 +10,9 @@
     armlab fit-joint <csv|folder> [frf.<f>=<v>] [out=<dir>]  FRF + Levy fits of real joint recordings
 
 Every verb that writes names its output folder with ``out=<dir>`` (default: a new
-``outputs/<protocol or verb>/<timestamp>``; armlab.data.outdir).
+``outputs/<protocol or verb>/<timestamp>``; armlab.data.outdir). Every verb takes
+``progress=false``: no progress display (by default long work shows one on a terminal and log
+lines elsewhere; :mod:`armlab.runner.progress`).
 
 Bad input is reported on one line (``armlab: error: ...``, exit status 2), never as a traceback.
 """
@@ -61,6 +63,8 @@ def _usage() -> str:
         "  effects [protocol=<name>]                       list the catalogue of unmodelled effects",
         "  diagnose-benchmark [referee.<f>=<v>] [diagnosis.<f>=<v>] [out=<dir>]",
         "                                                  blind referee of the diagnosis",
+        "  <verb> ... progress=false                       no progress display (default: live on a",
+        "                                                  terminal, log lines on stderr otherwise)",
         "",
         "every verb that writes takes out=<dir> (default: a new outputs/<protocol or verb>/<timestamp>)",
     ]
@@ -95,14 +99,15 @@ def compose(overrides: list[str]):
     return compose_protocol(overrides)
 
 
-def _run(args: list[str]) -> int:
+def _run(args: list[str], show: bool) -> int:
     from armlab.runner.launch import launch
 
-    return launch(args)
+    return launch(args, progress=show)
 
 
-def _estimate(args: list[str]) -> int:
+def _estimate(args: list[str], show: bool) -> int:
     from armlab.data.outdir import take_out
+    from armlab.runner.progress import display
     from armlab.runner.run import format_table, reestimate
 
     if not args or "=" in args[0]:
@@ -111,7 +116,8 @@ def _estimate(args: list[str]) -> int:
             "armlab estimate <run_dir> [<group>.<field>=<value>] [out=<dir>]"
         )
     out, rest = take_out(args[1:], "estimate")
-    out, results = reestimate(Path(args[0]), rest, out=out)
+    with display(show):
+        out, results = reestimate(Path(args[0]), rest, out=out)
     print(format_table(results))
     print(f"outputs: {out}")
     return 0
@@ -153,11 +159,12 @@ def _keyed(args: list[str], keys: tuple[str, ...], prefixes: tuple[str, ...]) ->
     return named, rest
 
 
-def _diagnose(args: list[str]) -> int:
+def _diagnose(args: list[str], show: bool) -> int:
     from armlab.data.outdir import default_out, take_out
     from armlab.diagnosis.report_text import format_summary
     from armlab.protocols import registry
     from armlab.runner.diagnose import run_diagnosis
+    from armlab.runner.progress import display
 
     out, args = take_out(args, "diagnose")
     named, rest = _keyed(args, ("data", "protocol", "units"), ("diagnosis",))
@@ -168,11 +175,13 @@ def _diagnose(args: list[str]) -> int:
     if named["data"] == "published":  # the source paper's published figures as the measurement
         if named.get("units"):
             return _fail("data=published takes no units= (the published figures carry theirs)")
-        return _diagnose_published(named["protocol"], rest, out)
+        with display(show):
+            return _diagnose_published(named["protocol"], rest, out)
     registry.get(named["protocol"], need="diagnose")
-    out, results = run_diagnosis(
-        Path(named["data"]), named["protocol"], rest, out, units=named.get("units") or None
-    )
+    with display(show):
+        out, results = run_diagnosis(
+            Path(named["data"]), named["protocol"], rest, out, units=named.get("units") or None
+        )
     print(format_summary(results))
     print(f"outputs: {out}")
     return 0
@@ -227,13 +236,15 @@ def _effects(args: list[str]) -> int:
     return 0
 
 
-def _benchmark(args: list[str]) -> int:
+def _benchmark(args: list[str], show: bool) -> int:
     from armlab.data.outdir import default_out, take_out
     from armlab.runner.diagnose import run_benchmark
+    from armlab.runner.progress import display
 
     out, args = take_out(args, "diagnose-benchmark")
     _, rest = _keyed(args, (), ("referee", "diagnosis"))
-    out, summary = run_benchmark(rest, out or default_out("diagnose-benchmark"))
+    with display(show):
+        out, summary = run_benchmark(rest, out or default_out("diagnose-benchmark"))
     print((out / "benchmark.md").read_text())
     print(f"outputs: {out}")
     return 0
@@ -288,20 +299,30 @@ def _main(argv: list[str] | None = None) -> int:
         print(_usage())  # also `armlab <verb> --help`
         return 0
     verb, rest = args[0], args[1:]
-    handlers = {
-        "run": _run,
-        "estimate": _estimate,
-        "view": _view,
-        "diagnose": _diagnose,
-        "effects": _effects,
-        "diagnose-benchmark": _benchmark,
-    }
     from armlab import viz
     from armlab.protocols import registry
+    from armlab.runner.progress import display, split_flag
+
+    show, rest = split_flag(rest)  # progress=true|false, taken by every verb
+    handlers = {
+        "run": lambda rest: _run(rest, show),
+        "estimate": lambda rest: _estimate(rest, show),
+        "view": _view,
+        "diagnose": lambda rest: _diagnose(rest, show),
+        "effects": _effects,
+        "diagnose-benchmark": lambda rest: _benchmark(rest, show),
+    }
+
+    def command_handler(run):
+        def handle(rest: list[str]) -> int:
+            with display(show):  # a protocol's verb reports through armlab.progress like the others
+                return run(rest, viz)
+
+        return handle
 
     for protocol in registry.protocols():  # verbs that protocols bring (e.g. fit-joint)
         for command in protocol.commands:
-            handlers[command.name] = lambda rest, run=command.run: run(rest, viz)
+            handlers[command.name] = command_handler(command.run)
     if verb not in handlers:
         return _fail(f"unknown verb {verb!r}; valid: {list(handlers)} (see armlab --help)")
     try:

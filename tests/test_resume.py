@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -292,6 +293,8 @@ def test_joblib_sweep_interrupted_resumes_bit_identical_to_a_serial_one(tmp_path
     # no sweep given: the one stored in multirun.yaml is reused
     resumed = _armlab("run", "--multirun", "resume=true", "hydra/launcher=joblib", f"out={run}")
     assert resumed.returncode == 0, resumed.stderr
+    # each joblib job logs its own progress lines, named by its number (tests/test_progress.py)
+    assert re.search(r"^armlab \[job [12]\]: simulate 14/14 trials, done in ", resumed.stderr, re.M)
     for job in ("0", "1", "2"):
         _same_run(serial / job, run / job)
     assert not _temporaries(run)

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from armlab import progress
 from armlab.config.diagnosis import DiagnosisConfig
 from armlab.config.effects import EFFECTS
 from armlab.diagnosis.families import FittedModel, ModelFamily, Surrogate, fit_model
@@ -135,11 +136,14 @@ def select_effects(
         gap_c, rss_c, _ = held_out_gap(current, trials, y_band)
         names = {s.name for s in selected}
         entries = []
+        tried = [n for n in candidates if n not in names and _INCOMPATIBLE.get(n) not in names]
+        progress.stage(f"try effects (step {step + 1})", len(tried), "candidates")
         for name, sur in candidates.items():
             if name in names or _INCOMPATIBLE.get(name) in names:
                 continue
             if sur.kind == "absorbed":
                 entries.append(_entry(name, gap_c, gap_c, 0.0, 0, excess0, None, identifiable=False))
+                progress.advance()
                 continue
             fm = fit_model(
                 trials,
@@ -154,6 +158,7 @@ def select_effects(
             dp = fm.n_params - current.n_params
             dbic = n_eff * np.log(rss / rss_c) + dp * np.log(n_eff)
             entries.append(_entry(name, gap_c, gap, float(dbic), dp, excess0, fm))
+            progress.advance()
         entries.sort(key=lambda e: e["delta_bic"])
         rankings.append(entries)
         best = entries[0] if entries else None

@@ -15,6 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
+from armlab import progress
 from armlab.config.diagnosis import REFEREE_SHARED_FIELDS, DiagnosisConfig, RefereeConfig
 from armlab.config.store import apply_overrides
 from armlab.data.rundir import require_complete
@@ -73,11 +74,13 @@ def run_diagnosis(
     require_complete(Path(data))  # a run folder (or its trials.h5) of a run that did not finish
     check_new_dir(out_dir)
     t0 = time.perf_counter()
+    progress.stage("diagnose")  # its steps, where the protocol reports them, follow
     results, series = run_diagnoser(Path(data), protocol, cfg, units)
     results["timing_s"] = {"diagnosis": time.perf_counter() - t0}
     out = new_dir(out_dir)
     names: list[str] = []
     if figures:
+        progress.stage("figures and recording")
         from armlab import viz  # figures and recordings at the edge only
 
         names = [p.name for p in hooks.figures(viz, series, results, out)]
@@ -88,6 +91,13 @@ def run_diagnosis(
 
 
 def _one_case(cls: str, rep: int, ref: RefereeConfig, diag_cfg: DiagnosisConfig, root: Path) -> dict:
+    # the benchmark reports whole cases; a case's own stages (run in this process with jobs=1)
+    # would replace that stage on the display
+    with progress.reporting(progress.NULL_SINK):
+        return _case(cls, rep, ref, diag_cfg, root)
+
+
+def _case(cls: str, rep: int, ref: RefereeConfig, diag_cfg: DiagnosisConfig, root: Path) -> dict:
     from armlab.diagnosis.scoring import expected_verdict, score_case
 
     referee = registry.get(ref.protocol, need="referee").diagnosis.referee
@@ -140,9 +150,15 @@ def run_benchmark(overrides: list[str] | None, out_dir: Path) -> tuple[Path, dic
         referee.validate(ref, diag_cfg)
     out = new_dir(out_dir)
     t0 = time.perf_counter()
-    cases = Parallel(n_jobs=ref.jobs)(
-        delayed(_one_case)(c, r, ref, diag_cfg, out) for c in classes for r in range(ref.replicates)
-    )
+    jobs = [(c, r) for c in classes for r in range(ref.replicates)]
+    progress.stage("diagnose-benchmark", len(jobs), "cases")
+    cases = []
+    # in order, each case as soon as it and those before it are done
+    for case in Parallel(n_jobs=ref.jobs, return_as="generator")(
+        delayed(_one_case)(c, r, ref, diag_cfg, out) for c, r in jobs
+    ):
+        cases.append(case)
+        progress.advance()
     summary = summarise(cases)
     summary["timing_s"] = time.perf_counter() - t0
     summary["median_diagnosis_s"] = float(np.median([c["seconds"] for c in cases]))

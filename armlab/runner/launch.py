@@ -28,13 +28,16 @@ def internal_error(exc: BaseException) -> str:
     )
 
 
-def _hydra_task(cfg, resume: bool) -> None:
-    """One Hydra job: check (or resume) its folder, run the protocol, print its table."""
+def _hydra_task(cfg, resume: bool, progress: bool = True) -> None:
+    """One Hydra job: check (or resume) its folder, run the protocol (its progress shown unless
+    ``progress`` is false; as log lines naming the job in a multirun), print its table."""
     from hydra.core.hydra_config import HydraConfig
+    from hydra.types import RunMode
     from omegaconf import OmegaConf
 
     from armlab.config.store import to_experiment
     from armlab.protocols import registry
+    from armlab.runner.progress import display
     from armlab.runner.resume import prepare_run_dir
     from armlab.runner.run import format_table, run_protocol
 
@@ -54,7 +57,9 @@ def _hydra_task(cfg, resume: bool) -> None:
     if not prepare_run_dir(out_dir, resume=resume, config_yaml=config_yaml, **meta):
         print(f"{out_dir} is complete (results.json); left untouched")
         return
-    results = run_protocol(exp, out_dir, config_yaml)
+    job = f"job {hydra_cfg.hydra.job.num}" if hydra_cfg.hydra.mode == RunMode.MULTIRUN else None
+    with display(progress, job=job):
+        results = run_protocol(exp, out_dir, config_yaml)
     if exp.output.print_table:
         print(format_table(results))
     print(f"outputs: {out_dir}")
@@ -78,8 +83,12 @@ def sweep_values(overrides: list[str]) -> list[list[str]]:
     return out
 
 
-def launch(args: list[str]) -> int:
+def launch(args: list[str], *, progress: bool = True) -> int:
     """``armlab run [--multirun] [resume=true] [out=<dir>] <overrides>``; returns the exit status.
+
+    ``progress``: show each job's progress (``progress=false`` of the command line: not). Like
+    ``resume=``, it is armlab's argument, not a config key: it changes no result, so it is not
+    stored with the run and a run resumes the same with or without it.
 
     Raises:
         ConfigError: a bad option or override (before Hydra makes any folder).
@@ -135,7 +144,7 @@ def launch(args: list[str]) -> int:
         started.append(HydraConfig.get().runtime.output_dir)
         try:
             with interrupt.handle_termination():  # a joblib worker's main thread runs the task
-                _hydra_task(cfg, resume)
+                _hydra_task(cfg, resume, progress)
         except ArmlabError as exc:
             print(f"armlab: error: {exc}", file=sys.stderr)
             raise SystemExit(2) from None

@@ -17,6 +17,7 @@ from pathlib import Path
 
 from omegaconf import OmegaConf
 
+from armlab import progress
 from armlab.config.schema import ExperimentConfig
 from armlab.data.h5io import read_trials, write_trials
 from armlab.data.rundir import (
@@ -63,14 +64,17 @@ def _run(cfg: ExperimentConfig, out_dir: Path, config_yaml: str, timing: dict) -
     protocol = registry.get(cfg.protocol_name, need="run")
     check_effects(protocol, cfg)
     t0 = time.perf_counter()
+    progress.stage("simulate")  # each stage's size, where known, comes from the computation
     sim = protocol.simulate(cfg)
     timing["simulate_s"] = time.perf_counter() - t0
     t1 = time.perf_counter()
+    progress.stage("estimate")
     results, series = sim.estimate()
     timing["estimate_s"] = time.perf_counter() - t1
     trials = sim.trials
     results["simulated_s"] = trials.n_trials * trials.n_samples / trials.fs_hz
     t2 = time.perf_counter()
+    progress.stage("outputs")
     if cfg.output.trials:
         _save_trials(out_dir / "trials.h5", trials, {"config_yaml": config_yaml, **sim.attrs})
     write_new(out_dir / "scene.xml", sim.scene_xml)
@@ -140,6 +144,7 @@ def reestimate(
     except ConfigError as exc:
         raise DataError(f"{path} holds trials of protocol {name!r}: {exc}") from None
     overrides = list(overrides or [])
+    progress.stage("estimate")
     results = protocol.reestimate(trials, stored, overrides)
     out = new_dir(out if out is not None else run_dir / f"reestimate_{datetime.now():%Y-%m-%d_%H-%M-%S-%f}")
     write_new(out / "overrides.yaml", OmegaConf.to_yaml(overrides))

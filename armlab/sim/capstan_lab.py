@@ -28,6 +28,7 @@ import mujoco
 import numpy as np
 from mujoco import rollout as mj_rollout
 
+from armlab import progress
 from armlab.errors import SimulationError
 from armlab.models.capstan_scene import CapstanScene
 from armlab.perturbations.sum_of_sines import SumOfSines
@@ -142,6 +143,7 @@ def simulate_capstan(
     data = [mujoco.MjData(model) for _ in range(min(nthread, n_trials))]
     state = np.tile(np.asarray(initial_state, float), (n_trials, 1))
     sd_out = np.empty((n_trials, n_samples, model.nsensordata))
+    progress.stage("simulate", n_trials, "trials")  # lock-step: n_trials * c1 / n_steps after a chunk
     with mj_rollout.Rollout(nthread=len(data)) as runner:
         for c0 in range(0, n_steps, _CHUNK_STEPS):
             steps = np.arange(c0, min(n_steps, c0 + _CHUNK_STEPS)) - n_settle  # 0 at the first sample
@@ -158,6 +160,8 @@ def simulate_capstan(
             state = states[:, -1]
             keep = (steps >= 0) & (steps % sub == 0)
             sd_out[:, steps[keep] // sub] = sd[:, keep]
+            c1 = c0 + len(steps)
+            progress.advance(n_trials * c1 / n_steps - n_trials * c0 / n_steps)
     out = _pairs(scene, sd_out)
     t_samples = np.arange(n_samples) / fs_hz
     check_bound(

@@ -16,6 +16,7 @@ import mujoco
 import numpy as np
 from mujoco import rollout as mj_rollout
 
+from armlab import progress
 from armlab.config.schema import ReflexConfig
 from armlab.errors import SimulationError
 from armlab.models.scene import MUSCLES, Scene
@@ -154,6 +155,8 @@ def simulate(
     hist_vel = np.empty_like(hist_len)
 
     state = np.tile(initial_state, (n_trials, 1))
+    # the trials advance together: after a chunk ending at step c1, n_trials * c1 / n_steps trials' worth
+    progress.stage("simulate", n_trials, "trials")
     with mj_rollout.Rollout(nthread=len(data)) as runner:
         for c0 in range(0, n_steps, chunk):
             c1 = min(n_steps, c0 + chunk)
@@ -195,6 +198,7 @@ def simulate(
             activation[:, sample[ok]] = states[:, keep][:, ok][..., act_adr + scene.muscle_act]
             muscle_ctrl[:, sample[ok]] = np.asarray(u)[:, keep][:, ok]
             qpos[:, sample[ok]] = states[:, keep][:, ok][..., 1 : 1 + model.nq]
+            progress.advance(n_trials * c1 / n_steps - n_trials * c0 / n_steps)
     return SimResult(
         sensordata=sensordata,
         activation=activation,

@@ -14,6 +14,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from armlab import progress
 from armlab.config.schema import EstimatorConfig
 from armlab.data.trial import TrialSet
 from armlab.errors import ConfigError, DataError
@@ -211,6 +212,7 @@ def estimate_protocol(
         if key not in trials.trial_meta:
             raise DataError(f"trials lack trial_meta[{key!r}]; have {sorted(trials.trial_meta)}")
     samples = _check_windows(trials, specs)
+    progress.stage("estimate", len(specs), "windows")
     proc = ProcessingConfig(
         lowpass_hz=estimator.lowpass_hz, filter_order=estimator.filter_order, baseline_s=estimator.baseline_s
     )
@@ -257,6 +259,7 @@ def estimate_protocol(
         entry["reduced"] = _entry(e_red, truth, fit_r, reduced=True)
         entry["reduced"]["xi_known"] = xi_known.tolist()
         windows.append(entry)
+        progress.advance()
         if not spec.extension:
             series = {
                 "t_s": fit_f.t,
@@ -311,9 +314,10 @@ def linearisation_bias(cfg: ConditioningWindowConfig) -> dict:
         estimator=replace(cfg.estimator, lowpass_hz=None, t_obs_s=None),
         scenario=replace(cfg.scenario, k_values=[int(scenario.k_values[-1])]),
     )
-    rec, scenario = simulate_protocol(exact)
-    specs = [s for s in window_specs(scenario, exact.estimator) if not s.extension]
-    results, _ = estimate_protocol(rec.trials, exact.estimator, specs)
+    with progress.scope("linearisation bias"):
+        rec, scenario = simulate_protocol(exact)
+        specs = [s for s in window_specs(scenario, exact.estimator) if not s.extension]
+        results, _ = estimate_protocol(rec.trials, exact.estimator, specs)
     w = results["windows"][-1]
     return {
         "muscle": cfg.arm.muscle,

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from armlab import progress
 from armlab.config.schema import EstimatorConfig
 from armlab.config.store import apply_overrides, stored_group
 from armlab.data.trial import TrialSet
@@ -29,7 +30,8 @@ def simulate(cfg: ConditioningWindowConfig) -> Simulated:
     def estimate() -> tuple[dict, dict]:
         specs = window_specs(scenario, cfg.estimator)
         results, series = estimate_protocol(rec.trials, cfg.estimator, specs)
-        score_truths(results, effective_truth(cfg, rec.trials, scenario, specs))
+        with progress.scope("effective truth"):  # the plan again, in the ideal lab
+            score_truths(results, effective_truth(cfg, rec.trials, scenario, specs))
         results["linearisation_bias"] = linearisation_bias(cfg)
         return results, series
 

@@ -18,6 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from armlab import progress
 from armlab.config.schema import FrfConfig
 from armlab.data.trial import TrialSet
 from armlab.errors import DataError, EstimationError
@@ -121,6 +122,7 @@ def simulate_fractional(cfg: FractionalElbowConfig) -> FractionalRecording:
         hint=FORCE_LOOP_HINT,
     )
     trials = []
+    progress.stage("simulate", len(rngs), "trials")
     for i, rng in enumerate(rngs):
         # the third child feeds the subject's fluctuation; the first two are those of a 2-way
         # spawn, so a steady subject draws exactly the force and sensor noise it always did
@@ -156,6 +158,7 @@ def simulate_fractional(cfg: FractionalElbowConfig) -> FractionalRecording:
                 trial=i,
             )
         )
+        progress.advance()
     names = {
         "f_ref": "N",
         "f_measured": "N",

@@ -12,6 +12,7 @@ from pathlib import Path
 
 from omegaconf import OmegaConf
 
+from armlab import progress
 from armlab.config.schema import FrfConfig
 from armlab.config.store import apply_overrides
 from armlab.data.joint_import import load_joint_data
@@ -50,18 +51,21 @@ def fit_joint_recordings(
     records = load_joint_data(Path(source), units=units)
     for trial in records:  # every file checked before the first fit
         frf.check_recording(trial.fs_hz, trial.n_samples, f"recording {trial.path.name}")
+    progress.stage("fit", len(records), "trials")
     for trial in records:
         name = trial.name
         res, ser = fit_joint_frf(trial.position, trial.torque, trial.fs_hz, frf, name)
         res["time_varying"] = trial.operating_point is not None  # an LTI fit is only a summary there
         res["source"] = str(trial.path)
         trials[name], series[name] = res, ser
+        progress.advance()
     results = {
         "protocol": "joint_frf",
         "frf": OmegaConf.to_container(OmegaConf.structured(frf)),
         "trials": trials,
     }
     out_dir.mkdir(parents=True, exist_ok=True)
+    progress.stage("outputs")
     results["files"] = {"bode": str(viz.plot_joint_bode(series, out_dir / "bode_impedance.png"))}
     write_new(out_dir / "table.txt", format_joint_table(results) + "\n")
     write_json(out_dir / "results.json", results)

@@ -20,6 +20,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
+from armlab import progress
 from armlab.data.trial import TrialSet
 from armlab.models.arm_endpoint import endpoint_truth, relaxed_activation
 from armlab.models.capstan_robot import TABLE_VI_ALPHA
@@ -98,23 +99,24 @@ def _stage(
         muscle_ctrl = activation_commands(
             activation, cfg.subject, n_trials, n_steps, sub, cfg.sensors.fs_hz, subject_rng
         )
-    clean = simulate_capstan(
-        scene,
-        state,
-        theta0,
-        refs,
-        kp=c.kp_Nm_per_rad,
-        kd=c.kd_Nms_per_rad,
-        fs_hz=cfg.sensors.fs_hz,
-        duration_s=v.trial_s,
-        settle_s=v.settle_s,
-        muscle_ctrl=muscle_ctrl,
-        who=TrialLabels(
-            protocol=cfg.protocol_name,
-            labels=tuple(f"{stage}, repetition {k + 1} of {n_trials}" for k in range(n_trials)),
-            hint=CAPSTAN_HINT,
-        ),
-    )
+    with progress.scope(stage):  # its simulation reported as "<stage>: simulate"
+        clean = simulate_capstan(
+            scene,
+            state,
+            theta0,
+            refs,
+            kp=c.kp_Nm_per_rad,
+            kd=c.kd_Nms_per_rad,
+            fs_hz=cfg.sensors.fs_hz,
+            duration_s=v.trial_s,
+            settle_s=v.settle_s,
+            muscle_ctrl=muscle_ctrl,
+            who=TrialLabels(
+                protocol=cfg.protocol_name,
+                labels=tuple(f"{stage}, repetition {k + 1} of {n_trials}" for k in range(n_trials)),
+                hint=CAPSTAN_HINT,
+            ),
+        )
     measured = measure({k: clean[k] for k in MEASURED}, _suite(cfg), cfg.sensors.fs_hz, rng)
     return {**measured, **{k: clean[k] for k in _SAVED_TRUTH}}
 
