@@ -73,3 +73,23 @@ def test_disabling_contacts_changes_no_trajectory():
         mujoco.mj_step(model, data, nstep=2000)
         runs.append(np.concatenate([data.qpos, data.qvel, data.act]))
     np.testing.assert_array_equal(runs[0], runs[1])
+
+
+def test_a_scene_without_contacts_refuses_a_geom_that_could_collide():
+    from dm_control import mjcf
+
+    from armlab.errors import ModelError
+    from armlab.models.scene import compile_mjcf
+
+    def two_boxes():
+        root = mjcf.RootElement(model="two_boxes")
+        root.worldbody.add("geom", name="floor", type="box", size=[1, 1, 0.1], contype=0, conaffinity=0)
+        body = root.worldbody.add("body", pos=[0, 0, 0.5])
+        body.add("freejoint")
+        body.add("geom", name="block", type="box", size=[0.1, 0.1, 0.1])  # contype 1 by default
+        return root
+
+    with pytest.raises(ModelError, match=r"geoms \['block'\] could collide.*contype=\"0\""):
+        compile_mjcf(two_boxes(), "toy scene", contacts=False)
+    model, _, _ = compile_mjcf(two_boxes(), "toy scene")  # with contacts: compiles as before
+    assert not model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_CONTACT

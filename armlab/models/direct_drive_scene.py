@@ -93,10 +93,6 @@ def _compose(elbow: ElbowConfig, sim: SimConfig) -> tuple[mjcf.RootElement, floa
     root.option.timestep = sim.timestep_s
     root.option.integrator = sim.integrator
     root.option.gravity = [0, 0, 0]  # horizontal plane; the vertical load is borne by bearings/arm
-    # no geom of the lab collides (contype = conaffinity = 0 throughout: the hand holds the handle
-    # through the grasp joints), so collision detection is skipped: the same trajectories, ~9 % of
-    # a physics step less (measured, 3.2 -> 2.9 us); build_direct_drive_scene checks the geoms
-    root.option.flag.contact = "disable"
 
     motor = mjcf.from_path(str(model_file("direct_drive", "direct_drive.xml")))
     arm = mjcf.from_path(str(model_file(elbow.model, f"{elbow.model}.xml")))
@@ -147,14 +143,7 @@ def _compose(elbow: ElbowConfig, sim: SimConfig) -> tuple[mjcf.RootElement, floa
 def build_direct_drive_scene(elbow: ElbowConfig, sim: SimConfig) -> DirectDriveScene:
     """Compose, compile and index the direct-drive + elbow scene."""
     root, length = _compose(elbow, sim)
-    model, xml, _ = compile_mjcf(root, "direct-drive scene")
-    colliding = np.flatnonzero(model.geom_contype | model.geom_conaffinity)
-    if colliding.size:  # contacts are disabled in _compose: a colliding geom would be ignored
-        names = [mujoco.mj_id2name(model, mujoco.mjtObj.mjOBJ_GEOM, int(g)) or f"geom {g}" for g in colliding]
-        raise ModelError(
-            f"direct-drive scene: geoms {names} have contype/conaffinity set, but the lab disables "
-            'contacts; give them contype="0" conaffinity="0" (the hand holds the handle by joints)'
-        )
+    model, xml, _ = compile_mjcf(root, "direct-drive scene", contacts=False)
 
     def jid(name: str) -> int:
         return mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, name)
