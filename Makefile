@@ -36,6 +36,7 @@ ci-sweep: $(STAMP)
 bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_protocol.py
 	$(BIN)/python benchmarks/bench_fractional.py
+	$(BIN)/python benchmarks/bench_realtime.py
 	$(BIN)/python benchmarks/bench_diagnosis.py
 
 lint: $(STAMP)

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import copy
+
 import mujoco
 import numpy as np
 import pytest
@@ -53,3 +55,41 @@ def test_muscle_truth_matches_the_hill_design_within_its_approximations():
     truth = elbow_truth(build_direct_drive_scene(cfg, SimConfig()), cfg, 2000.0)
     assert truth.K == pytest.approx(57.6, rel=1e-6)
     assert truth.D == pytest.approx(3.9, rel=0.02)
+
+
+def test_disabling_contacts_changes_no_trajectory():
+    # the lab skips collision detection (no geom collides); with it switched back on the
+    # trajectory must be the same bit for bit, and the scene must carry the flag (the speed)
+    scene = build_direct_drive_scene(ElbowConfig(), SimConfig())
+    assert scene.model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_CONTACT
+    assert 'contact="disable"' in scene.xml
+    with_contacts = copy.copy(scene.model)
+    with_contacts.opt.disableflags &= ~int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
+    runs = []
+    for model in (scene.model, with_contacts):
+        data = mujoco.MjData(model)
+        data.qpos[scene.motor_qpos] = 0.3  # a swing of the link and the hand
+        data.ctrl[scene.motor_act] = 2.0
+        mujoco.mj_step(model, data, nstep=2000)
+        runs.append(np.concatenate([data.qpos, data.qvel, data.act]))
+    np.testing.assert_array_equal(runs[0], runs[1])
+
+
+def test_a_scene_without_contacts_refuses_a_geom_that_could_collide():
+    from dm_control import mjcf
+
+    from armlab.errors import ModelError
+    from armlab.models.scene import compile_mjcf
+
+    def two_boxes():
+        root = mjcf.RootElement(model="two_boxes")
+        root.worldbody.add("geom", name="floor", type="box", size=[1, 1, 0.1], contype=0, conaffinity=0)
+        body = root.worldbody.add("body", pos=[0, 0, 0.5])
+        body.add("freejoint")
+        body.add("geom", name="block", type="box", size=[0.1, 0.1, 0.1])  # contype 1 by default
+        return root
+
+    with pytest.raises(ModelError, match=r"geoms \['block'\] could collide.*contype=\"0\""):
+        compile_mjcf(two_boxes(), "toy scene", contacts=False)
+    model, _, _ = compile_mjcf(two_boxes(), "toy scene")  # with contacts: compiles as before
+    assert not model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_CONTACT

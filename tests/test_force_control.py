@@ -119,3 +119,68 @@ def test_stretch_reflex_raises_activation_only_after_its_latency():
     # 0.04 m moment arm over L0 = 0.1 m = 0.012 normalised stretch; stretch + spinal gains of 0.5
     # each command ~0.012 more activation (measured gap 0.0099 after activation dynamics)
     assert 0.005 < gap[lat + 40 :].max() < 0.02
+
+
+def test_the_reflex_of_a_latency_of_periods_at_once_equals_one_period_at_a_time():
+    # _MuscleCommands computes the delayed reflex lag1 periods at a time; each period's command
+    # must equal reflex_command on that period's lagged history (what the loop did per period)
+    from types import SimpleNamespace
+
+    from armlab.sim.force_control import _MuscleCommands
+    from armlab.sim.rollout import reflex_command
+
+    rng = np.random.default_rng(3)
+    total, fs = 500, FS
+    reflex = ReflexConfig(stretch_latency_s=0.0105, spinal_latency_s=0.03, velocity_gain=0.3)
+    lag1, lag2 = 21, 60
+    lengths = 0.3 + 0.01 * rng.standard_normal((total, 3))
+    velocities = rng.standard_normal((total, 3))
+    base = 0.2 + 0.05 * rng.standard_normal((total, 2))
+    data = SimpleNamespace(ctrl=np.zeros(3), actuator_length=lengths[0].copy(), actuator_velocity=np.zeros(3))
+    muscles = np.array([1, 2])
+    cmd = _MuscleCommands(data, muscles, ElbowConfig(), reflex, base, total, fs)
+    len_ref = lengths[0, muscles]
+    for k in range(total):
+        data.actuator_length[:] = lengths[k]
+        data.actuator_velocity[:] = velocities[k]
+        cmd.apply(k)
+        lagged = [max(k - lag1, 0), max(k - lag2, 0)]
+        want = reflex_command(
+            base[k], lengths[lagged][:, muscles], velocities[lagged][:, muscles], len_ref, reflex
+        )
+        np.testing.assert_array_equal(data.ctrl[muscles], want)  # bit for bit
+
+
+def test_concurrent_trials_equal_serial_trials_bit_for_bit():
+    from armlab.sim.threads import run_trials
+
+    cfg = ElbowConfig()  # Hill muscle pair with its reflex: every path of the loop
+    scene = build_direct_drive_scene(cfg, SimConfig())
+    refs = [_reference(0.4, peak) for peak in (2.0, 4.0, 5.0)]
+
+    def one(i: int):
+        return simulate_force_trial(
+            scene,
+            refs[i],
+            FS,
+            0.1,
+            cfg,
+            ReflexConfig(),
+            DirectDriveConfig(),
+            JR3_FORCE,
+            DD_ENCODER,
+            np.random.default_rng(i),
+        )
+
+    serial, threaded = run_trials(one, 3, 1), run_trials(one, 3, 3)
+    for a, b in zip(serial, threaded, strict=True):
+        for name in (
+            "f_measured",
+            "f_true",
+            "theta_measured",
+            "phi_true",
+            "current",
+            "tau_dym",
+            "activation",
+        ):
+            np.testing.assert_array_equal(getattr(a, name), getattr(b, name))

@@ -358,7 +358,7 @@ def build_capstan_scene(
         _add_arm(root, robot, arm, shoulder, reach_m, timestep_s)
     if cfg.drag:
         _add_drag(root, robot, cfg)
-    model, xml, assets = compile_mjcf(root, "capstan scene")
+    model, xml, assets = compile_mjcf(root, "capstan scene", contacts=False)
     return _index(model, xml, assets, load, mass, shoulder, cfg, arm)
 
 

@@ -143,7 +143,7 @@ def _compose(elbow: ElbowConfig, sim: SimConfig) -> tuple[mjcf.RootElement, floa
 def build_direct_drive_scene(elbow: ElbowConfig, sim: SimConfig) -> DirectDriveScene:
     """Compose, compile and index the direct-drive + elbow scene."""
     root, length = _compose(elbow, sim)
-    model, xml, _ = compile_mjcf(root, "direct-drive scene")
+    model, xml, _ = compile_mjcf(root, "direct-drive scene", contacts=False)
 
     def jid(name: str) -> int:
         return mujoco.mj_name2id(model, mujoco.mjtObj.mjOBJ_JOINT, name)

@@ -146,14 +146,36 @@ def _compose(arm: ArmConfig, cuff: CuffConfig, robot: RobotConfig, sim: SimConfi
     return root
 
 
-def compile_mjcf(root: mjcf.RootElement, what: str) -> tuple[mujoco.MjModel, str, dict]:
-    """Compile a composed scene: ``(model, xml, assets)``; a :class:`ModelError` naming ``what``."""
+def compile_mjcf(
+    root: mjcf.RootElement, what: str, contacts: bool = True
+) -> tuple[mujoco.MjModel, str, dict]:
+    """Compile a composed scene: ``(model, xml, assets)``; a :class:`ModelError` naming ``what``.
+
+    Args:
+        root: the composed scene.
+        what: its name in an error.
+        contacts: False for a scene whose geoms never collide (``contype = conaffinity = 0``
+            throughout, every coupling a joint or tendon): MuJoCo's collision detection is switched
+            off (``root`` gets ``<flag contact="disable"/>``), which changes no trajectory and saves
+            ~9-14 % of a physics step in the direct-drive and capstan labs (measured); a geom that
+            could collide is then a ModelError rather than a silently ignored contact.
+    """
+    if not contacts:
+        root.option.flag.contact = "disable"
     xml = root.to_xml_string()
     assets = root.get_assets()
     try:
-        return mujoco.MjModel.from_xml_string(xml, assets), xml, assets
+        model = mujoco.MjModel.from_xml_string(xml, assets)
     except ValueError as exc:
         raise ModelError(f"composed {what} does not compile: {exc}") from None
+    colliding = np.flatnonzero(model.geom_contype | model.geom_conaffinity)
+    if not contacts and colliding.size:
+        names = [model.geom(int(g)).name or f"geom {g}" for g in colliding]
+        raise ModelError(
+            f"composed {what}: geoms {names} could collide, but the scene runs without contacts; "
+            'give them contype="0" conaffinity="0" (the scene couples its bodies by joints and tendons)'
+        )
+    return model, xml, assets
 
 
 def sensor_slices(model: mujoco.MjModel) -> dict[str, slice]:

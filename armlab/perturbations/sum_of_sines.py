@@ -69,17 +69,19 @@ class SumOfSines:
 
     def value(self, t: np.ndarray) -> np.ndarray:
         """(n, n_joints) rad at times ``t`` (n,) s."""
-        t = np.asarray(t, float)
-        w, _ = self._fade(t)
-        s, _ = self._parts(t)
-        return w[:, None] * s
+        return self.value_and_derivative(t)[0]
 
     def derivative(self, t: np.ndarray) -> np.ndarray:
         """(n, n_joints) rad/s at times ``t`` (n,) s."""
+        return self.value_and_derivative(t)[1]
+
+    def value_and_derivative(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Both (n, n_joints), rad and rad/s, at times ``t`` (n,) s, from one evaluation of the
+        sines (a servo's feed-forward needs both: half the work of two calls)."""
         t = np.asarray(t, float)
         w, dw = self._fade(t)
         s, ds = self._parts(t)
-        return dw[:, None] * s + w[:, None] * ds
+        return w[:, None] * s, dw[:, None] * s + w[:, None] * ds
 
 
 def sum_of_sines(

@@ -1,4 +1,5 @@
-"""Simulation: the held posture, robot IK, batched rollout with reflexes, the simulated lab."""
+"""Simulation: the held posture, robot IK, batched rollout with reflexes, the simulated lab,
+trials stepped from Python on threads."""
 
 from armlab.sim.capstan_lab import CLEAN_UNITS, simulate_capstan
 from armlab.sim.force_control import ForceTrial, simulate_force_trial
@@ -21,6 +22,7 @@ from armlab.sim.rollout import (
     simulate,
 )
 from armlab.sim.subject import activation_commands
+from armlab.sim.threads import run_trials
 
 __all__ = [
     "activation_commands",
@@ -40,4 +42,5 @@ __all__ = [
     "solve_ik",
     "CLEAN_UNITS",
     "simulate_capstan",
+    "run_trials",
 ]

@@ -150,7 +150,8 @@ def simulate_capstan(
             t = steps * dt
             ctrl = np.zeros((n_trials, len(steps), model.nu))
             for k, ref in enumerate(references):
-                ctrl[k][:, scene.motor_act] = theta0 + ref.value(t) + (kd / kp) * ref.derivative(t)
+                r, dr = ref.value_and_derivative(t)
+                ctrl[k][:, scene.motor_act] = theta0 + r + (kd / kp) * dr
             if per_step:
                 ctrl[:, :, scene.muscle_act] = muscle_ctrl[:, c0 : c0 + len(steps)]
             elif muscle_ctrl is not None:

@@ -12,12 +12,18 @@ co-contraction (fluctuating, when a subject's commands are given) plus the delay
 or the fractional element its torque. A trial whose motor angle leaves the safety range fails
 with :class:`SimulationError`.
 
-The controller needs each sample's measurement before the next step, so MuJoCo is stepped from
-Python once per control period (``mujoco.rollout`` cannot close a Python feedback loop).
+The controller needs each sample's measurement before the next step and quantises, rounds and
+clamps what it reads and commands (no MuJoCo actuator can hold it), so MuJoCo is stepped from
+Python once per control period (``mujoco.rollout`` cannot close a Python feedback loop). The
+period's Python is kept to plain float arithmetic (about 7 us against about 15 us of physics for
+the 5 steps), the muscles' delayed reflex is computed a latency's worth of periods at a time, and
+the trials of a run step concurrently on threads (:mod:`armlab.sim.threads`: MuJoCo releases the
+GIL while stepping), bit-identical to one trial after the other.
 """
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import mujoco
@@ -91,9 +97,65 @@ class ForceTrial:
         return float(np.sqrt(np.mean((self.f_measured - self.f_ref) ** 2) / np.mean(self.f_ref**2)))
 
 
-def _measure(clean: float, k: int, noise: np.ndarray, bias: float, drift: float, t: float, q: float) -> float:
-    v = clean + noise[k] + bias + drift * t
-    return round(v / q) * q if q > 0 else v
+class _MuscleCommands:
+    """The elbow muscles' commands, one control period at a time: the base (co-contraction or a
+    subject's fluctuating commands) plus the delayed stretch reflex.
+
+    The reflex of period ``k`` reads the muscle lengths and velocities of period
+    ``k - lag >= k - lag_stretch`` (the shorter latency, at least one period), all recorded by
+    then, so the commands of ``lag_stretch`` periods are computed at once by one vectorised
+    :func:`reflex_command` call (the same element-wise operations as one call per period, so the
+    same numbers); each period only records the state and writes its row.
+    """
+
+    def __init__(
+        self,
+        data: mujoco.MjData,
+        muscles: np.ndarray,
+        elbow: ElbowConfig,
+        reflex: ReflexConfig,
+        muscle_base: np.ndarray | None,
+        total: int,
+        fs_hz: float,
+    ) -> None:
+        self.ctrl, self.muscles = data.ctrl, muscles
+        first = int(muscles[0])
+        if np.array_equal(muscles, np.arange(first, first + muscles.size)):
+            self.ctrl, self.muscles = data.ctrl[first : first + muscles.size], slice(None)  # a view
+        self.base = elbow.cocontraction if muscle_base is None else np.asarray(muscle_base, float)
+        self.rows = self.base  # without reflex: the base, row by row
+        self.reflex = reflex if reflex.enabled else None
+        if self.reflex is not None:
+            self.lag1 = max(1, int(round(reflex.stretch_latency_s * fs_hz)))
+            self.lag2 = max(1, int(round(reflex.spinal_latency_s * fs_hz)))
+            self.all_muscles = muscles
+            self.len_ref = data.actuator_length[muscles].copy()
+            self.length, self.velocity = data.actuator_length, data.actuator_velocity  # views
+            self.hist_len = np.empty((total, data.actuator_length.size))
+            self.hist_vel = np.empty((total, data.actuator_velocity.size))
+            self.total, self.k0 = total, 0
+
+    def apply(self, k: int) -> None:
+        """Record period ``k``'s muscle state and write its commands into ``data.ctrl``."""
+        if self.reflex is not None:
+            self.hist_len[k] = self.length
+            self.hist_vel[k] = self.velocity
+            if k % self.lag1 == 0:  # the next lag1 periods' commands, from periods <= k
+                self.k0 = k
+                ks = np.arange(k, min(k + self.lag1, self.total))
+                lagged = np.stack([np.maximum(ks - self.lag1, 0), np.maximum(ks - self.lag2, 0)])
+                cols = self.all_muscles
+                base = self.base if np.ndim(self.base) == 0 else self.base[ks]
+                self.rows = reflex_command(
+                    base,
+                    self.hist_len[lagged][..., cols],
+                    self.hist_vel[lagged][..., cols],
+                    self.len_ref,
+                    self.reflex,
+                )
+            self.ctrl[self.muscles] = self.rows[k - self.k0]
+        else:
+            self.ctrl[self.muscles] = self.rows[k]
 
 
 def simulate_force_trial(
@@ -190,115 +252,120 @@ def simulate_force_trial(
         )
         x_el = element.initial_state(0.0)
     mujoco.mj_forward(m, data)
-    use_reflex = reflex.enabled and muscles.size > 0
-    if use_reflex:
-        lag1 = max(1, int(round(reflex.stretch_latency_s * fs_hz)))
-        lag2 = max(1, int(round(reflex.spinal_latency_s * fs_hz)))
-        len_ref = data.actuator_length[muscles].copy()
-        hist_len = np.tile(len_ref, (total + 1, 1))
-        hist_vel = np.zeros((total + 1, muscles.size))
+    muscle_ctrl = None  # without reflex or a subject's commands the co-contraction written above holds
+    if muscles.size and (reflex.enabled or muscle_base is not None):
+        muscle_ctrl = _MuscleCommands(data, muscles, elbow, reflex, muscle_base, total, fs_hz)
 
-    out = np.zeros((8, total))
-    act_out = np.zeros((total, 2))
-    sl_psi, sl_psid = scene.sensors["grasp_psi"], scene.sensors["grasp_psi_dot"]
+    # the loop below is the controller of one control period, in plain Python floats (the same
+    # IEEE operations, in the same order, as Eqs. (19)-(21) above; no NumPy call per period): it
+    # runs once per 0.5 ms, so each operation counts. MuJoCo's arrays are read through views.
+    qpos, sd, ctrl, act = data.qpos, data.sensordata, data.ctrl, data.act
+    i_psi, i_psid = scene.sensors["grasp_psi"].start, scene.sensors["grasp_psi_dot"].start
+    i_acc = scene.sensors["handle_acc"].start + 1  # the tangential axis a_y
     kg, dg = scene.grasp_k, scene.grasp_d
-    qm, qe = scene.motor_qpos, scene.elbow_qpos
-    sl_acc = scene.sensors["handle_acc"]
+    qm, qe, motor_act, el_act = scene.motor_qpos, scene.elbow_qpos, scene.motor_act, scene.element_act
+    safety, sensed_mass, deadband = motor.safety_range_rad, motor.sensed_mass_kg, motor.sign_deadband_rad_s
+    kp, ki, kd = motor.kp, motor.ki_per_s, motor.kd_s
+    q_f, q_e = force_spec.quant_step, encoder_spec.quant_step
+    ref_l, f_noise_l, e_noise_l = ref.tolist(), f_noise.tolist(), e_noise.tolist()
+    acc_noise_l = acc_noise.tolist()
+    # the recorded samples, one Python list per channel (stacked after the loop)
+    rec_f_meas, rec_f_true, rec_th_meas, rec_theta = ([0.0] * total for _ in range(4))
+    rec_phi, rec_current, rec_tau_dym = ([0.0] * total for _ in range(3))
+    act_hist = np.zeros((total, m.na))
     n_saturate = int(round(_SATURATION_RUN_S * fs_hz))
     max_saturated = SATURATION_DUTY_MAX * total
     saturated = n_saturated = 0
     h = m.opt.timestep
     theta_prev = e_prev = v_f = v_raw_prev = integ = de_f = de_raw_prev = 0.0
+    step = mujoco.mj_step
     for k in range(total):
         t = k * dt
-        when = (k - n_settle) * dt
-        theta = float(data.qpos[qm])
-        if not abs(theta) <= motor.safety_range_rad:
+        q, s = qpos.tolist(), sd.tolist()  # one read each: Python floats
+        theta = q[qm]
+        if not abs(theta) <= safety:
             raise who.error(
                 trial,
-                when,
+                (k - n_settle) * dt,
                 f"the motor angle reached {theta:+.3f} rad, outside the safety range "
-                f"±{motor.safety_range_rad} rad; the trial is aborted (lower the force peak, raise the "
+                f"±{safety} rad; the trial is aborted (lower the force peak, raise the "
                 "co-contraction or the arm stiffness)",
                 state="aborted",
             )
-        psi = float(data.sensordata[sl_psi][0])
-        psid = float(data.sensordata[sl_psid][0])
-        f_true = -(kg * psi + dg * psid) / L
+        f_true = -(kg * s[i_psi] + dg * s[i_psid]) / L
         if not abs(f_true) <= GRASP_FORCE_BOUND_N:
             raise who.error(
                 trial,
-                when,
+                (k - n_settle) * dt,
                 f"grasp force |{f_true:.4g}| N beyond its {GRASP_FORCE_BOUND_N:g} N bound (the reference "
                 "stays within 5 N, the motor pushes at most ~48 N)",
             )
         # the sensor also carries the handle mass beyond its measuring plane (tangential a_y)
-        f_sensor = f_true + motor.sensed_mass_kg * float(data.sensordata[sl_acc][1])
-        f_meas = _measure(f_sensor, k, f_noise, f_bias, f_drift, t, force_spec.quant_step)
-        th_meas = _measure(theta, k, e_noise, e_bias, 0.0, t, encoder_spec.quant_step)
+        acc_y = s[i_acc]
+        f_meas = f_true + sensed_mass * acc_y + f_noise_l[k] + f_bias + f_drift * t
+        if q_f > 0:
+            f_meas = round(f_meas / q_f) * q_f
+        th_meas = theta + e_noise_l[k] + e_bias + 0.0 * t  # an encoder does not drift
+        if q_e > 0:
+            th_meas = round(th_meas / q_e) * q_e
         if k == 0:
-            theta_prev, e_prev = th_meas, ref[0] - f_meas
+            theta_prev, e_prev = th_meas, ref_l[0] - f_meas
         # velocity: low-passed encoder differences (bilinear first order); acceleration: the JR3
         # accelerometer's tangential axis, a_y = L theta_dd (sensor data of the last step)
         v_raw = (th_meas - theta_prev) / dt
         v_f = lp_a * v_f + lp_b * (v_raw + v_raw_prev)
         v_raw_prev, theta_prev = v_raw, th_meas
-        a_f = float(data.sensordata[sl_acc][1]) / L + acc_noise[k]
-        sgn = 0.0 if abs(v_f) < motor.sign_deadband_rad_s else (1.0 if v_f > 0 else -1.0)
+        a_f = acc_y / L + acc_noise_l[k]
+        sgn = 0.0 if abs(v_f) < deadband else (1.0 if v_f > 0 else -1.0)
         tau_dym = m_hat * a_f + c_hat * v_f + b_hat * sgn
-        e = ref[k] - f_meas
+        r_k = ref_l[k]
+        e = r_k - f_meas
         integ += e * dt
         de_raw = (e - e_prev) / dt
         de_f = lp_a * de_f + lp_b * (de_raw + de_raw_prev)
         e_prev, de_raw_prev = e, de_raw
-        u_force = ref[k] + motor.kp * e + motor.ki_per_s * integ + motor.kd_s * de_f
+        u_force = r_k + kp * e + ki * integ + kd * de_f
         current = (tau_dym + L * u_force) / kt
         current = min(max(round(current / i_lsb) * i_lsb, -i_max), i_max)
         if abs(current) >= i_max:
             saturated += 1
             n_saturated += 1
+            if saturated > n_saturate:
+                raise who.error(
+                    trial,
+                    (k - n_settle) * dt,
+                    f"the motor current stayed at its ±{i_max:.2f} A limit for {_SATURATION_RUN_S:g} s "
+                    "without a break (the force loop is unstable or the force exceeds the motor's peak "
+                    "torque)",
+                )
+            if n_saturated > max_saturated:
+                raise who.error(
+                    trial,
+                    (k - n_settle) * dt,
+                    f"the motor current was at its ±{i_max:.2f} A limit for {n_saturated / fs_hz:.2f} s, "
+                    f"more than the {SATURATION_DUTY_MAX:.0%} saturation duty allowed over the "
+                    f"{total / fs_hz:g} s trial (the force loop oscillates against the current limit)",
+                )
         else:
             saturated = 0
-        if saturated > n_saturate:
-            raise who.error(
-                trial,
-                when,
-                f"the motor current stayed at its ±{i_max:.2f} A limit for {_SATURATION_RUN_S:g} s without a "
-                "break (the force loop is unstable or the force exceeds the motor's peak torque)",
-            )
-        if n_saturated > max_saturated:
-            raise who.error(
-                trial,
-                when,
-                f"the motor current was at its ±{i_max:.2f} A limit for {n_saturated / fs_hz:.2f} s, more "
-                f"than the {SATURATION_DUTY_MAX:.0%} saturation duty allowed over the "
-                f"{total / fs_hz:g} s trial (the force loop oscillates against the current limit)",
-            )
-        data.ctrl[scene.motor_act] = current
-
-        if use_reflex:
-            hist_len[k] = data.actuator_length[muscles]
-            hist_vel[k] = data.actuator_velocity[muscles]
-            lagged = [max(k - lag1, 0), max(k - lag2, 0)]
-            base = elbow.cocontraction if muscle_base is None else muscle_base[k]
-            u = reflex_command(base, hist_len[lagged], hist_vel[lagged], len_ref, reflex)
-            data.ctrl[muscles] = u
-        elif muscle_base is not None:
-            data.ctrl[muscles] = muscle_base[k]
+        ctrl[motor_act] = current
+        if muscle_ctrl is not None:
+            muscle_ctrl.apply(k)
+        phi = q[qe]
         if element is not None:
-            phi = float(data.qpos[qe])
-            data.ctrl[scene.element_act] = -element.coeff * (element.C @ x_el + element.D * phi)
+            ctrl[el_act] = -element.coeff * (element.C @ x_el + element.D * phi)
             x_el = element.A @ x_el + element.B * phi
 
-        out[:, k] = (ref[k], f_meas, f_true, th_meas, theta, data.qpos[qe], current, tau_dym)
+        rec_f_meas[k], rec_f_true[k], rec_th_meas[k], rec_theta[k] = f_meas, f_true, th_meas, theta
+        rec_phi[k], rec_current[k], rec_tau_dym[k] = phi, current, tau_dym
         if muscles.size:
-            act_out[k] = data.act[act_idx]
-        mujoco.mj_step(m, data, nstep=substeps)
+            act_hist[k] = act
+        step(m, data, substeps)  # (nstep positional: a keyword costs ~0.3 us a call)
         # MuJoCo resets a diverged state (its clock restarts at 0) and warns
-        if not abs(data.time - (k + 1) * substeps * h) < 0.5 * h or not np.isfinite(data.qpos[qm]):
+        if not abs(data.time - (k + 1) * substeps * h) < 0.5 * h or not math.isfinite(qpos[qm]):
             raise who.error(
                 trial,
-                when + dt,
+                (k - n_settle) * dt + dt,
                 "the state became non-finite or MuJoCo reset it (its acceleration diverged); "
                 f"MuJoCo warned {warning_counts([data])}",
             )
@@ -306,6 +373,8 @@ def simulate_force_trial(
     if warned:
         raise who.error(trial, (total - n_settle) * dt, f"MuJoCo warned {warned} during the trial")
 
+    out = np.array([ref_l, rec_f_meas, rec_f_true, rec_th_meas, rec_theta, rec_phi, rec_current, rec_tau_dym])
+    act_out = act_hist[:, act_idx] if muscles.size else np.zeros((total, 2))
     rec = out[:, n_settle:]
     return ForceTrial(
         f_ref=rec[0],

@@ -48,6 +48,7 @@ from armlab.sensors.presets import DD_ENCODER, JR3_FORCE
 from armlab.sim.force_control import FORCE_LOOP_HINT, simulate_force_trial
 from armlab.sim.stability import TrialLabels
 from armlab.sim.subject import activation_commands
+from armlab.sim.threads import run_trials
 
 __all__ = [
     "FractionalRecording",
@@ -121,9 +122,8 @@ def simulate_fractional(cfg: FractionalElbowConfig) -> FractionalRecording:
         ),
         hint=FORCE_LOOP_HINT,
     )
-    trials = []
-    progress.stage("simulate", len(rngs), "trials")
-    for i, rng in enumerate(rngs):
+    plans = []
+    for rng in rngs:
         # the third child feeds the subject's fluctuation; the first two are those of a 2-way
         # spawn, so a steady subject draws exactly the force and sensor noise it always did
         plan_rng, noise_rng, subject_rng = rng.spawn(3)
@@ -140,25 +140,30 @@ def simulate_fractional(cfg: FractionalElbowConfig) -> FractionalRecording:
                 scenario.fs_hz,
                 subject_rng,
             )[0]
-        trials.append(
-            simulate_force_trial(
-                scene,
-                f_ref,
-                scenario.fs_hz,
-                scenario.settle_s,
-                cfg.elbow,
-                cfg.reflex,
-                cfg.motor,
-                force_spec,
-                enc_spec,
-                noise_rng,
-                accel_noise_rad_s2=accel_noise,
-                muscle_base=base,
-                who=who,
-                trial=i,
-            )
+        plans.append((f_ref, noise_rng, base))
+
+    def one(i: int):
+        f_ref, noise_rng, base = plans[i]
+        return simulate_force_trial(
+            scene,
+            f_ref,
+            scenario.fs_hz,
+            scenario.settle_s,
+            cfg.elbow,
+            cfg.reflex,
+            cfg.motor,
+            force_spec,
+            enc_spec,
+            noise_rng,
+            accel_noise_rad_s2=accel_noise,
+            muscle_base=base,
+            who=who,
+            trial=i,
         )
-        progress.advance()
+
+    # one thread per trial (MuJoCo steps without the GIL): the same trials as a serial loop
+    progress.stage("simulate", len(plans), "trials")
+    trials = run_trials(one, len(plans), done=progress.advance)
     names = {
         "f_ref": "N",
         "f_measured": "N",
