@@ -21,6 +21,7 @@ imports only NumPy, SciPy and :mod:`armlab.errors`.
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 from typing import Literal
 
 import numpy as np
@@ -29,6 +30,7 @@ from scipy import signal
 from armlab.errors import ConfigError, DataError
 
 __all__ = [
+    "bilinear",
     "lowpass_noise",
     "butterworth",
     "five_point_derivatives",
@@ -198,6 +200,23 @@ def lowpass_causal(
     return y
 
 
+@lru_cache(maxsize=4096)
+def _bilinear(num: tuple[float, ...], den: tuple[float, ...], fs_hz: float) -> tuple[np.ndarray, np.ndarray]:
+    b, a = signal.bilinear(num, den, fs_hz)
+    b.flags.writeable = a.flags.writeable = False  # shared by every caller with these values
+    return b, a
+
+
+def bilinear(num, den, fs_hz: float) -> tuple[np.ndarray, np.ndarray]:
+    """``scipy.signal.bilinear(num, den, fs_hz)``, remembered for repeated coefficients.
+
+    A fit evaluates the same analogue filter for every trial and again at every revisited
+    parameter; SciPy's polynomial algebra costs ~1 ms a call, far more than filtering the data.
+    The returned arrays are read-only (shared between callers).
+    """
+    return _bilinear(tuple(float(x) for x in num), tuple(float(x) for x in den), float(fs_hz))
+
+
 def second_order_ba(natural_hz: float, damping_ratio: float, fs_hz: float) -> tuple[np.ndarray, np.ndarray]:
     """``(b, a)`` of ``wn² / (s² + 2 ζ wn s + wn²)``, ``wn = 2 pi natural_hz``, by the bilinear transform.
 
@@ -216,7 +235,7 @@ def second_order_ba(natural_hz: float, damping_ratio: float, fs_hz: float) -> tu
         ``(b, a)``, (3,) each.
     """
     w = 2.0 * math.pi * natural_hz  # rad/s
-    return signal.bilinear([w * w], [1.0, 2.0 * damping_ratio * w, w * w], fs_hz)
+    return bilinear([w * w], [1.0, 2.0 * damping_ratio * w, w * w], fs_hz)
 
 
 def second_order_lowpass(

@@ -25,6 +25,7 @@ import numpy as np
 from scipy import signal
 
 from armlab.diagnosis.families import ModelFamily, NLParam, Surrogate, lowpass2, sensor_lowpass, shift_columns
+from armlab.dsp import bilinear
 from armlab.protocols.joint_1dof.diagnosis.data import PreparedTrial
 
 __all__ = [
@@ -67,7 +68,7 @@ def _compliance(tr: PreparedTrial, tau2: float, tau1: float, ratio: float) -> np
     """
     num = [ratio * tau2, ratio * tau1, ratio]
     den = [tau2, tau1, 1.0 + ratio]
-    b, a = signal.bilinear(num, den, tr.raw_fs_hz)
+    b, a = bilinear(num, den, tr.raw_fs_hz)
     x0 = tr.x_raw[0]
     return tr.to_fit_rate(signal.lfilter(b, a, tr.x_raw - x0) + ratio / (1.0 + ratio) * x0)
 
