@@ -57,8 +57,9 @@ def butterworth(
 ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     """Digital Butterworth filter by the bilinear transform with pre-warping (``scipy.signal.butter``).
 
-    The gain is exactly -3 dB (1/sqrt 2) at ``cutoff_hz``. No range check: the callers phrase
-    their own (``cutoff_hz`` must lie in (0, fs_hz / 2), else scipy raises ``ValueError``).
+    The gain is exactly -3 dB (1/sqrt 2) at ``cutoff_hz``. Designs are remembered. No range
+    check: the callers phrase their own (``cutoff_hz`` must lie in (0, fs_hz / 2), else scipy
+    raises ``ValueError``).
 
     Args:
         cutoff_hz: Hz, -3 dB frequency; ``(low, high)`` for a band-pass.
@@ -71,7 +72,16 @@ def butterworth(
     Returns:
         The sections, or ``(b, a)``.
     """
-    return signal.butter(int(order), cutoff_hz, btype=btype, fs=fs_hz, output=output)
+    cutoff = tuple(float(c) for c in cutoff_hz) if isinstance(cutoff_hz, (tuple, list)) else float(cutoff_hz)
+    out = _butter(int(order), cutoff, btype, float(fs_hz), output)
+    return tuple(a.copy() for a in out) if isinstance(out, tuple) else out.copy()
+
+
+@lru_cache(maxsize=1024)
+def _butter(order: int, cutoff, btype: str, fs_hz: float, output: str):
+    """:func:`butterworth`'s design, remembered (callers get copies): a fit filters with the same
+    few designs thousands of times, and SciPy's design (~3 ms) costs more than filtering a trial."""
+    return signal.butter(order, cutoff, btype=btype, fs=fs_hz, output=output)
 
 
 def sosfiltfilt_padlen(sos: np.ndarray) -> int:
@@ -202,9 +212,7 @@ def lowpass_causal(
 
 @lru_cache(maxsize=4096)
 def _bilinear(num: tuple[float, ...], den: tuple[float, ...], fs_hz: float) -> tuple[np.ndarray, np.ndarray]:
-    b, a = signal.bilinear(num, den, fs_hz)
-    b.flags.writeable = a.flags.writeable = False  # shared by every caller with these values
-    return b, a
+    return signal.bilinear(num, den, fs_hz)
 
 
 def bilinear(num, den, fs_hz: float) -> tuple[np.ndarray, np.ndarray]:
@@ -212,9 +220,10 @@ def bilinear(num, den, fs_hz: float) -> tuple[np.ndarray, np.ndarray]:
 
     A fit evaluates the same analogue filter for every trial and again at every revisited
     parameter; SciPy's polynomial algebra costs ~1 ms a call, far more than filtering the data.
-    The returned arrays are read-only (shared between callers).
+    Returns copies (callers may keep or change them).
     """
-    return _bilinear(tuple(float(x) for x in num), tuple(float(x) for x in den), float(fs_hz))
+    b, a = _bilinear(tuple(float(x) for x in num), tuple(float(x) for x in den), float(fs_hz))
+    return b.copy(), a.copy()
 
 
 def second_order_ba(natural_hz: float, damping_ratio: float, fs_hz: float) -> tuple[np.ndarray, np.ndarray]:

@@ -110,24 +110,25 @@ def shift_columns(t: np.ndarray, z: np.ndarray, delay: float) -> np.ndarray:
     return out[pad : pad + z.shape[0]]
 
 
-# The last spectra of padded signals, newest last: (signal, pad, spectrum). A fit shifts the same
-# trial signal by many delays, and delays a finite difference apart share the pad, hence the
-# spectrum. Entries hold their signal, so an identity match cannot be a recycled id; the signals
-# shifted (prepared trial data, stacked regressors) are never modified in place.
+# The last spectra of padded signals, most recently used last: (signal copy, pad, spectrum). A fit
+# shifts the same signal (a trial's velocity; the stacked regressor of a delay search whose other
+# columns are fixed) by many delays, and delays a finite difference apart share the pad, hence
+# the spectrum. A hit needs an equal signal (compared exactly), so the cache cannot go stale.
 _SPECTRA: list[tuple[np.ndarray, int, np.ndarray]] = []
-_SPECTRA_KEPT = 24  # a few pads of each trial's signal in a fit (6 trials in the REKLAB folder)
+_SPECTRA_KEPT = 24  # a few pads of each trial's signals in a fit (6 trials in the REKLAB folder)
 
 
 def _padded_spectrum(z: np.ndarray, pad: int) -> np.ndarray:
     """``rfft`` along axis 0 of ``z`` padded by ``pad`` copies of its end values on each side."""
-    for i, (zc, pc, spec) in enumerate(_SPECTRA):
-        if zc is z and pc == pad:
+    for i in range(len(_SPECTRA) - 1, -1, -1):
+        zc, pc, spec = _SPECTRA[i]
+        if pc == pad and zc.shape == z.shape and (zc is z or np.array_equal(zc, z)):
             _SPECTRA.append(_SPECTRA.pop(i))
             return spec
     zz = np.concatenate([np.repeat(z[:1], pad, axis=0), z, np.repeat(z[-1:], pad, axis=0)], axis=0)
     spec = np.fft.rfft(zz, axis=0)
     spec.flags.writeable = False
-    _SPECTRA.append((z, pad, spec))
+    _SPECTRA.append((z if not z.flags.writeable else z.copy(), pad, spec))
     del _SPECTRA[:-_SPECTRA_KEPT]
     return spec
 
