@@ -21,6 +21,7 @@ imports only NumPy, SciPy and :mod:`armlab.errors`.
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 from typing import Literal
 
 import numpy as np
@@ -29,6 +30,7 @@ from scipy import signal
 from armlab.errors import ConfigError, DataError
 
 __all__ = [
+    "bilinear",
     "lowpass_noise",
     "butterworth",
     "five_point_derivatives",
@@ -55,8 +57,9 @@ def butterworth(
 ) -> np.ndarray | tuple[np.ndarray, np.ndarray]:
     """Digital Butterworth filter by the bilinear transform with pre-warping (``scipy.signal.butter``).
 
-    The gain is exactly -3 dB (1/sqrt 2) at ``cutoff_hz``. No range check: the callers phrase
-    their own (``cutoff_hz`` must lie in (0, fs_hz / 2), else scipy raises ``ValueError``).
+    The gain is exactly -3 dB (1/sqrt 2) at ``cutoff_hz``. Designs are remembered. No range
+    check: the callers phrase their own (``cutoff_hz`` must lie in (0, fs_hz / 2), else scipy
+    raises ``ValueError``).
 
     Args:
         cutoff_hz: Hz, -3 dB frequency; ``(low, high)`` for a band-pass.
@@ -69,7 +72,16 @@ def butterworth(
     Returns:
         The sections, or ``(b, a)``.
     """
-    return signal.butter(int(order), cutoff_hz, btype=btype, fs=fs_hz, output=output)
+    cutoff = tuple(float(c) for c in cutoff_hz) if isinstance(cutoff_hz, (tuple, list)) else float(cutoff_hz)
+    out = _butter(int(order), cutoff, btype, float(fs_hz), output)
+    return tuple(a.copy() for a in out) if isinstance(out, tuple) else out.copy()
+
+
+@lru_cache(maxsize=1024)
+def _butter(order: int, cutoff, btype: str, fs_hz: float, output: str):
+    """:func:`butterworth`'s design, remembered (callers get copies): a fit filters with the same
+    few designs thousands of times, and SciPy's design (~3 ms) costs more than filtering a trial."""
+    return signal.butter(order, cutoff, btype=btype, fs=fs_hz, output=output)
 
 
 def sosfiltfilt_padlen(sos: np.ndarray) -> int:
@@ -198,6 +210,22 @@ def lowpass_causal(
     return y
 
 
+@lru_cache(maxsize=4096)
+def _bilinear(num: tuple[float, ...], den: tuple[float, ...], fs_hz: float) -> tuple[np.ndarray, np.ndarray]:
+    return signal.bilinear(num, den, fs_hz)
+
+
+def bilinear(num, den, fs_hz: float) -> tuple[np.ndarray, np.ndarray]:
+    """``scipy.signal.bilinear(num, den, fs_hz)``, remembered for repeated coefficients.
+
+    A fit evaluates the same analogue filter for every trial and again at every revisited
+    parameter; SciPy's polynomial algebra costs ~1 ms a call, far more than filtering the data.
+    Returns copies (callers may keep or change them).
+    """
+    b, a = _bilinear(tuple(float(x) for x in num), tuple(float(x) for x in den), float(fs_hz))
+    return b.copy(), a.copy()
+
+
 def second_order_ba(natural_hz: float, damping_ratio: float, fs_hz: float) -> tuple[np.ndarray, np.ndarray]:
     """``(b, a)`` of ``wn² / (s² + 2 ζ wn s + wn²)``, ``wn = 2 pi natural_hz``, by the bilinear transform.
 
@@ -216,7 +244,7 @@ def second_order_ba(natural_hz: float, damping_ratio: float, fs_hz: float) -> tu
         ``(b, a)``, (3,) each.
     """
     w = 2.0 * math.pi * natural_hz  # rad/s
-    return signal.bilinear([w * w], [1.0, 2.0 * damping_ratio * w, w * w], fs_hz)
+    return bilinear([w * w], [1.0, 2.0 * damping_ratio * w, w * w], fs_hz)
 
 
 def second_order_lowpass(

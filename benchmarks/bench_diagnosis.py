@@ -1,7 +1,8 @@
 """Benchmark of `armlab diagnose` (run by `make bench`).
 
-Target (issue 5): one diagnosis with about ten candidates under 60 s on the 2-core CI machine.
-Times the diagnosis alone (import, preparation, noise floor, every candidate fitted in each
+Targets: one diagnosis with about ten candidates under 60 s on the 2-core CI machine (issue 5);
+one diagnosis of the REKLAB ankle folder within 20 s (issue 21). Each is printed as
+``<what>: <value> (target <op> <value>) OK|MISSED``. Times the diagnosis alone (import, preparation, noise floor, every candidate fitted in each
 greedy step, where/how-far breakdowns; no figures) on
 
 - a referee dataset of the joint_1dof protocol (4 trials x 30 s at 1 kHz, a hidden reflex),
@@ -25,7 +26,12 @@ from armlab.protocols.joint_1dof.diagnosis.diagnose import candidate_names
 from armlab.protocols.joint_1dof.diagnosis.referee import make_dataset
 from armlab.runner.diagnose import run_diagnoser
 
-TARGET_S = 60.0  # s, issue 5
+TARGET_S = 60.0  # s, issue 5: one diagnosis with about ten candidates
+REKLAB_S = 20.0  # s, issue 21: one diagnosis of the REKLAB ankle folder
+
+
+def _verdict(what: str, wall: float, target: float) -> str:
+    return f"{what}: {wall:.1f} s (target <= {target:g} s) {'OK' if wall <= target else 'MISSED'}"
 
 
 def _time(folder: Path, cfg: DiagnosisConfig, protocol: str = "joint_1dof") -> tuple[float, dict]:
@@ -41,24 +47,22 @@ def main() -> None:
         ds = make_dataset("reflex", 0, RefereeConfig(), cfg, Path(tmp) / "trials")
         wall, res = _time(ds.folder, cfg)
     print(
-        f"diagnose joint_1dof referee dataset (4 x 30 s, {n_cand} candidates): {wall:.1f} s "
-        f"(target < {TARGET_S:.0f} s) verdict {res['verdict']}"
+        _verdict(f"diagnose joint_1dof referee dataset (4 x 30 s, {n_cand} candidates)", wall, TARGET_S)
+        + f"; verdict {res['verdict']}"
     )
     if DEFAULT_REKLAB_ROOT.is_dir():
         wall, res = _time(DEFAULT_REKLAB_ROOT, cfg)
-        print(
-            f"diagnose joint_1dof REKLAB ankle folder ({len(res['trials'])} trials, {n_cand} candidates): "
-            f"{wall:.1f} s (target < {TARGET_S:.0f} s) verdict {res['verdict']}"
-        )
+        what = f"diagnose joint_1dof REKLAB ankle folder ({len(res['trials'])} trials, {n_cand} candidates)"
+        print(_verdict(what, wall, REKLAB_S) + f"; verdict {res['verdict']}")
+    else:
+        print(f"diagnose joint_1dof REKLAB ankle folder: MISSED, no data at {DEFAULT_REKLAB_ROOT}")
     ref = RefereeConfig(protocol="conditioning_window")
     n_cond = len(select_candidates(cfg, COND_SURROGATES, "conditioning_window"))
     with tempfile.TemporaryDirectory() as tmp:
         ds = make_cond_dataset("reflex+cuff_compliance", 0, ref, cfg, Path(tmp) / "trials")
         wall, res = _time(ds.folder / "trials.h5", cfg, "conditioning_window")
-    print(
-        f"diagnose conditioning_window referee dataset ({len(res['trials'])} trials, {n_cond} candidates): "
-        f"{wall:.1f} s (target < {TARGET_S:.0f} s) verdict {res['verdict']}"
-    )
+    what = f"diagnose conditioning_window referee dataset ({len(res['trials'])} trials, {n_cond} candidates)"
+    print(_verdict(what, wall, TARGET_S) + f"; verdict {res['verdict']}")
 
 
 if __name__ == "__main__":

@@ -101,13 +101,36 @@ def shift_columns(t: np.ndarray, z: np.ndarray, delay: float) -> np.ndarray:
     # padded with its end values so the circular wrap stays outside the record
     fs = 1.0 / (t[1] - t[0])
     pad = int(np.ceil(abs(delay) * fs)) + 8
-    zz = np.concatenate([np.repeat(z[:1], pad, axis=0), z, np.repeat(z[-1:], pad, axis=0)], axis=0)
-    f = np.fft.rfftfreq(zz.shape[0], 1.0 / fs)
+    n = z.shape[0] + 2 * pad
+    f = np.fft.rfftfreq(n, 1.0 / fs)
     phase = np.exp(-2j * np.pi * f * delay)
-    if zz.ndim > 1:
+    if z.ndim > 1:
         phase = phase[:, None]
-    out = np.fft.irfft(np.fft.rfft(zz, axis=0) * phase, n=zz.shape[0], axis=0)
+    out = np.fft.irfft(_padded_spectrum(z, pad) * phase, n=n, axis=0)
     return out[pad : pad + z.shape[0]]
+
+
+# The last spectra of padded signals, most recently used last: (signal copy, pad, spectrum). A fit
+# shifts the same signal (a trial's velocity; the stacked regressor of a delay search whose other
+# columns are fixed) by many delays, and delays a finite difference apart share the pad, hence
+# the spectrum. A hit needs an equal signal (compared exactly), so the cache cannot go stale.
+_SPECTRA: list[tuple[np.ndarray, int, np.ndarray]] = []
+_SPECTRA_KEPT = 24  # a few pads of each trial's signals in a fit (6 trials in the REKLAB folder)
+
+
+def _padded_spectrum(z: np.ndarray, pad: int) -> np.ndarray:
+    """``rfft`` along axis 0 of ``z`` padded by ``pad`` copies of its end values on each side."""
+    for i in range(len(_SPECTRA) - 1, -1, -1):
+        zc, pc, spec = _SPECTRA[i]
+        if pc == pad and zc.shape == z.shape and (zc is z or np.array_equal(zc, z)):
+            _SPECTRA.append(_SPECTRA.pop(i))
+            return spec
+    zz = np.concatenate([np.repeat(z[:1], pad, axis=0), z, np.repeat(z[-1:], pad, axis=0)], axis=0)
+    spec = np.fft.rfft(zz, axis=0)
+    spec.flags.writeable = False
+    _SPECTRA.append((z if not z.flags.writeable else z.copy(), pad, spec))
+    del _SPECTRA[:-_SPECTRA_KEPT]
+    return spec
 
 
 @dataclass(frozen=True, eq=False)
@@ -153,12 +176,36 @@ class _Problem:
 
     def __init__(self, trials, y_band, model, hp, family):
         self.trials, self.y_band, self.model, self.hp, self.family = trials, y_band, model, hp, family
+        # (trial, column) -> (last unfiltered column, its filtered form): most columns (the
+        # nominal a, v, x; effects whose parameters the search is not moving) repeat unchanged
+        # from one evaluation to the next, and filtering is the costliest step of an evaluation
+        self._filtered: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}
 
     def design(self, theta):
         cols = [self.family.columns(tr, self.model, theta) for tr in self.trials]
         if self.hp is None:
             return cols
-        return [zero_phase(self.hp, c, axis=0) for c in cols]
+        return [self._high_pass(i, c) for i, c in enumerate(cols)]
+
+    def _high_pass(self, i: int, phi: np.ndarray) -> np.ndarray:
+        """``zero_phase(hp, phi, axis=0)``, filtering only the columns that changed (the filter
+        treats each column on its own, so the result is the same to the bit)."""
+        # laid out as sosfiltfilt lays out its result (time reversed in a column-major buffer),
+        # so that products with it take the same NumPy/BLAS path, hence the same roundings
+        out = np.empty(phi.shape[::-1])[:, ::-1].T
+        todo = []
+        for j in range(phi.shape[1]):
+            hit = self._filtered.get((i, j))
+            if hit is not None and np.array_equal(hit[0], phi[:, j]):
+                out[:, j] = hit[1]
+            else:
+                todo.append(j)
+        if todo:
+            fresh = zero_phase(self.hp, phi[:, todo], axis=0)
+            out[:, todo] = fresh
+            for k, j in enumerate(todo):
+                self._filtered[i, j] = (phi[:, j].copy(), fresh[:, k].copy())
+        return out
 
     def solve(self, theta):
         phis = self.design(theta)

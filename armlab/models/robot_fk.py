@@ -28,12 +28,19 @@ def _quat_to_mat(q: np.ndarray) -> np.ndarray:
     return m.reshape(3, 3)
 
 
-def _axis_rotation(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
-    """(..., 3, 3) rotations about a fixed unit ``axis`` by ``angle`` (...,) rad (Rodrigues)."""
+def _axis_rotation(axis: np.ndarray, angle: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+    """(..., 3, 3) rotations about a fixed unit ``axis`` by ``angle`` (...,) rad (Rodrigues).
+
+    ``out`` (..., 3, 3), if given, receives the result (no temporary of that size is made).
+    """
     k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
-    s = np.sin(angle)[..., None, None]
-    c = np.cos(angle)[..., None, None]
-    return np.eye(3) + s * k + (1 - c) * (k @ k)
+    if out is None:
+        out = np.empty(np.shape(angle) + (3, 3))
+    # I + sin(a) K + (1 - cos(a)) K^2, each operation element-wise in that order
+    np.multiply(np.sin(angle)[..., None, None], k, out=out)
+    np.add(np.eye(3), out, out=out)
+    out += (1 - np.cos(angle))[..., None, None] * (k @ k)
+    return out
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -92,9 +99,15 @@ class RobotKinematics:
             ((..., 3) m contact position, (..., 3, 3) F/T site rotation, columns = site axes).
         """
         q = np.asarray(q, float)
-        rot = np.broadcast_to(self.base_rot, q.shape[:-1] + (3, 3))
-        pos = np.broadcast_to(self.base_pos, q.shape[:-1] + (3,))
+        shape = q.shape[:-1]
+        # ~10^6 samples make every (..., 3, 3) product a 50 MB array: the chain writes into
+        # buffers reused by every link instead of allocating each product anew (same operations)
+        rot_buf, fixed, joint = (np.empty(shape + (3, 3)) for _ in range(3))
+        pos_buf, offset = np.empty(shape + (3,)), np.empty(shape + (3,))
+        rot = np.broadcast_to(self.base_rot, shape + (3, 3))
+        pos = np.broadcast_to(self.base_pos, shape + (3,))
         for i in range(7):
-            pos = pos + rot @ self.link_pos[i]
-            rot = rot @ self.link_rot[i] @ _axis_rotation(self.axes[i], q[..., i])
+            pos = np.add(pos, np.matmul(rot, self.link_pos[i], out=offset), out=pos_buf)
+            np.matmul(rot, self.link_rot[i], out=fixed)
+            rot = np.matmul(fixed, _axis_rotation(self.axes[i], q[..., i], out=joint), out=rot_buf)
         return pos + rot @ self.contact_pos, rot @ self.ft_rot

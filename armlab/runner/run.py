@@ -12,6 +12,7 @@ registry; nothing here names one.
 from __future__ import annotations
 
 import time
+from concurrent.futures import ThreadPoolExecutor
 from datetime import datetime
 from pathlib import Path
 
@@ -75,11 +76,22 @@ def _run(cfg: ExperimentConfig, out_dir: Path, config_yaml: str, timing: dict) -
     results["simulated_s"] = trials.n_trials * trials.n_samples / trials.fs_hz
     t2 = time.perf_counter()
     progress.stage("outputs")
-    if cfg.output.trials:
-        _save_trials(out_dir / "trials.h5", trials, {"config_yaml": config_yaml, **sim.attrs})
-    write_new(out_dir / "scene.xml", sim.scene_xml)
-    ctx = OutputContext(viz=viz, out_dir=out_dir, trials=trials, results=results, series=series, cfg=cfg)
-    written = protocol.outputs(ctx) if protocol.outputs is not None else {}
+    # The trial file is compressed in a second thread (HDF5's deflate runs without the GIL) while
+    # the protocol draws its figures and recording; leaving the block waits for it, so it is
+    # complete (or its error raised) before results.json can mark the run complete.
+    with ThreadPoolExecutor(max_workers=1) as background:
+        saving = (
+            background.submit(
+                _save_trials, out_dir / "trials.h5", trials, {"config_yaml": config_yaml, **sim.attrs}
+            )
+            if cfg.output.trials
+            else None
+        )
+        write_new(out_dir / "scene.xml", sim.scene_xml)
+        ctx = OutputContext(viz=viz, out_dir=out_dir, trials=trials, results=results, series=series, cfg=cfg)
+        written = protocol.outputs(ctx) if protocol.outputs is not None else {}
+        if saving is not None:
+            saving.result()
     results["files"] = {k: str(v) for k, v in written.items()}
     timing["outputs_s"] = time.perf_counter() - t2
     return results

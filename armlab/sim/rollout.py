@@ -79,6 +79,34 @@ def reflex_command(
     return np.clip(u, 0.0, 1.0)
 
 
+class _ChunkBuffers:
+    """Contiguous control, state and sensor arrays of one rollout chunk, reused across chunks."""
+
+    def __init__(self, n_trials: int, chunk: int, nu: int, nstate: int, nsd: int) -> None:
+        self._shape = (n_trials, nu, nstate, nsd)
+        self._full = self._alloc(chunk)
+
+    def _alloc(self, m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        n, nu, nstate, nsd = self._shape
+        return np.zeros((n, m, nu)), np.empty((n, m, nstate)), np.empty((n, m, nsd))
+
+    def get(self, m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(ctrl (n, m, nu), state (n, m, nstate), sensordata (n, m, nsd)); a shorter last chunk
+        gets its own arrays (the rollout needs contiguous ones of exactly m steps)."""
+        return self._full if m == self._full[0].shape[1] else self._alloc(m)
+
+
+def _lagged(hist: np.ndarray, c0: int, c1: int, lag: int, before) -> np.ndarray:
+    """``hist[:, c0 - lag : c1 - lag]`` (n_trials, c1 - c0, k), ``before`` where the index is < 0
+    (the steady state before the first step)."""
+    n, _, k = hist.shape
+    out = np.empty((n, c1 - c0, k))
+    lead = min(c1 - c0, max(0, lag - c0))
+    out[:, :lead] = before
+    out[:, lead:] = hist[:, c0 + lead - lag : c1 - lag]
+    return out
+
+
 def simulate(
     scene: Scene,
     initial_state: np.ndarray,
@@ -144,7 +172,8 @@ def simulate(
     ref_len = data[0].sensordata[len_sl].copy()
 
     nsd = model.nsensordata
-    act_adr = 1 + model.nq + model.nv
+    nstate = mujoco.mj_stateSize(model, spec)
+    act_cols = 1 + model.nq + model.nv + scene.muscle_act
     n_samples = n_steps // substeps
     sensordata = np.empty((n_trials, n_samples, nsd))
     activation = np.empty((n_trials, n_samples, len(MUSCLES)))
@@ -154,50 +183,48 @@ def simulate(
     hist_len = np.empty((n_trials, n_steps, len(MUSCLES)))
     hist_vel = np.empty_like(hist_len)
 
-    state = np.tile(initial_state, (n_trials, 1))
+    # Buffers reused by every full chunk: the rollout writes into them (no allocation, no page
+    # faults per chunk), and its inputs are checked once here, so each call skips the checks.
+    bufs = _ChunkBuffers(n_trials, chunk, model.nu, nstate, nsd)
+    state = np.ascontiguousarray(np.tile(initial_state, (n_trials, 1)), dtype=float)
+    if state.shape[1] != nstate:
+        raise SimulationError(f"initial_state must hold {nstate} full-physics values, got {state.shape[1]}")
+    models = [model] * n_trials  # the unchecked call takes one model per trial
     # the trials advance together: after a chunk ending at step c1, n_trials * c1 / n_steps trials' worth
     progress.stage("simulate", n_trials, "trials")
     with mj_rollout.Rollout(nthread=len(data)) as runner:
         for c0 in range(0, n_steps, chunk):
             c1 = min(n_steps, c0 + chunk)
             m = c1 - c0
-            ctrl = np.zeros((n_trials, m, model.nu))
+            ctrl, states, sd = bufs.get(m)
             ctrl[:, :, scene.robot_act] = robot_targets[:, c0:c1]
             base = muscle_base[:, c0:c1] if per_step else muscle_base
             if reflex.enabled:
-                idx = np.arange(c0, c1)
-                lagged = []
-                for lag in (lag_s, lag_sp):
-                    j = idx - lag
-                    valid = j >= 0
-                    jl = np.where(valid, j, 0)
-                    length = np.where(valid[None, :, None], hist_len[:, jl], ref_len)
-                    vel = np.where(valid[None, :, None], hist_vel[:, jl], 0.0)
-                    lagged.append((length, vel))
                 u = reflex_command(
                     base,
-                    np.stack([lagged[0][0], lagged[1][0]]),
-                    np.stack([lagged[0][1], lagged[1][1]]),
+                    np.stack([_lagged(hist_len, c0, c1, lag, ref_len) for lag in (lag_s, lag_sp)]),
+                    np.stack([_lagged(hist_vel, c0, c1, lag, 0.0) for lag in (lag_s, lag_sp)]),
                     ref_len,
                     reflex,
                 )
             else:
                 u = np.broadcast_to(base, (n_trials, m, len(MUSCLES)))
             ctrl[:, :, scene.muscle_act] = u
-            states, sd = runner.rollout(model, data, state, ctrl, nstep=m)
+            runner.rollout(models, data, state, ctrl, nstep=m, state=states, sensordata=sd, skip_checks=True)
             check_rollout(who, state, states, data, dt, np.arange(c0 + 1, c1 + 1) * dt)
-            state = states[:, -1]
+            state = np.ascontiguousarray(states[:, -1])  # a copy: the buffer is reused
             hist_len[:, c0:c1] = sd[:, :, len_sl]
             hist_vel[:, c0:c1] = sd[:, :, vel_sl]
-            # keep the samples whose last physics step falls in this chunk
-            steps = np.arange(c0, c1)
-            keep = (steps + 1) % substeps == 0
-            sample = (steps[keep] + 1) // substeps - 1
-            ok = sample < n_samples
-            sensordata[:, sample[ok]] = sd[:, keep][:, ok]
-            activation[:, sample[ok]] = states[:, keep][:, ok][..., act_adr + scene.muscle_act]
-            muscle_ctrl[:, sample[ok]] = np.asarray(u)[:, keep][:, ok]
-            qpos[:, sample[ok]] = states[:, keep][:, ok][..., 1 : 1 + model.nq]
+            # keep the samples whose last physics step falls in this chunk: steps c0 + o,
+            # c0 + o + substeps, ... (step s ends sample (s + 1) / substeps - 1)
+            o = (substeps - 1 - c0) % substeps
+            s0 = (c0 + o + 1) // substeps - 1
+            s1 = min(n_samples, s0 + len(range(o, m, substeps)))
+            kept = slice(o, o + (s1 - s0) * substeps, substeps)
+            sensordata[:, s0:s1] = sd[:, kept]
+            activation[:, s0:s1] = states[:, kept][..., act_cols]
+            muscle_ctrl[:, s0:s1] = u[:, kept]
+            qpos[:, s0:s1] = states[:, kept, 1 : 1 + model.nq]
             progress.advance(n_trials * c1 / n_steps - n_trials * c0 / n_steps)
     return SimResult(
         sensordata=sensordata,

@@ -91,10 +91,45 @@ def _truth(results: Mapping[str, Any], windows: Sequence[Mapping[str, Any]], key
 
 
 def _new_figure(n_rows: int, height_per_row: float, width: float = 9.5) -> tuple[Figure, np.ndarray]:
-    fig = Figure(figsize=(width, 0.8 + height_per_row * n_rows), layout="constrained")
+    fig = Figure(figsize=(width, 0.8 + height_per_row * n_rows), dpi=DPI)  # measured as saved
     FigureCanvasAgg(fig)
     axes = np.atleast_1d(fig.subplots(n_rows, 1, sharex=True))
     return fig, axes
+
+
+_PAD_PX = 10.0  # px at DPI 120 (~0.08 in), margin around the measured labels and legends
+
+
+def _fit_margins(fig: Figure, axes: np.ndarray) -> None:
+    """Set the margins from the measured extents of labels, tick labels, legends and title.
+
+    A layout engine would measure every axes twice and savefig would then draw the figure twice;
+    measuring once here and drawing once in savefig halves the figure's cost. The stacked panels
+    (one column, shared x) keep their order; the gap between panels fits the tallest overhang.
+    """
+    renderer = fig.canvas.get_renderer()
+    width, height = fig.bbox.width, fig.bbox.height
+    boxes = [(ax.get_position().transformed(fig.transFigure), ax.get_tightbbox(renderer)) for ax in axes]
+    left = max(pos.x0 - tight.x0 for pos, tight in boxes) + _PAD_PX
+    right = max(tight.x1 - pos.x1 for pos, tight in boxes) + 2 * _PAD_PX
+    below = [pos.y0 - tight.y0 for pos, tight in boxes]
+    above = [tight.y1 - pos.y1 for pos, tight in boxes]
+    title = 0.0
+    if fig._suptitle is not None:  # the title hangs from the top edge, the panels below it
+        fig._suptitle.set(y=1.0 - _PAD_PX / height, va="top")
+        title = fig._suptitle.get_window_extent(renderer).height + _PAD_PX
+    top = max(above[0], 0.0) + title + 2 * _PAD_PX
+    bottom = max(below[-1], 0.0) + _PAD_PX
+    gap = max([b + a for b, a in zip(below[:-1], above[1:], strict=True)] + [0.0]) + _PAD_PX
+    n = len(axes)
+    panel = (height - top - bottom - (n - 1) * gap) / n
+    fig.subplots_adjust(
+        left=left / width,
+        right=1.0 - right / width,
+        bottom=bottom / height,
+        top=1.0 - top / height,
+        hspace=gap / panel if n > 1 else 0.0,
+    )
 
 
 def _threshold_lines(axes: np.ndarray, results: Mapping[str, Any], model: str | None) -> None:
@@ -205,6 +240,7 @@ def plot_window_sweep(
     fig_no = "Fig. 4" if model == "full" else "Fig. 5"
     what = "full model (K, D, ξ estimated)" if model == "full" else "reduced model (ξ fixed)"
     fig.suptitle(f"{fig_no}: estimates over T_obs, {what}", fontsize=10)
+    _fit_margins(fig, axes)
     return save_png(fig, path)
 
 
@@ -260,6 +296,7 @@ def plot_validation(series: Mapping[str, Any], path: str | Path) -> Path:
     axes[0].legend(**_OUTSIDE)
     axes[-1].set_xlabel("t − t_p [ms]")
     fig.suptitle("Fig. 6: prediction of Δτ_ext for a trial not used in the training set", fontsize=10)
+    _fit_margins(fig, axes)
     return save_png(fig, path)
 
 
@@ -306,4 +343,5 @@ def plot_error_vs_window(results: Mapping[str, Any], path: str | Path) -> Path:
         ax.legend(**_OUTSIDE)
     axes[-1].set_xlabel("length of the observation interval T_obs [ms]")
     fig.suptitle("Relative estimation error against the simulation's ground truth", fontsize=10)
+    _fit_margins(fig, axes)
     return save_png(fig, path)

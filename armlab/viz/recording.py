@@ -63,6 +63,14 @@ def _onset_aligned(onset: int, start: int, stop: int, step: int) -> np.ndarray:
     return np.arange(onset - ((onset - start) // step) * step, stop, step)
 
 
+def _series_names(trials: TrialSet, ch: str) -> list[str]:
+    """Legend names of a channel's axes, with the channel's unit."""
+    n_axes = trials.channels[ch].shape[2]
+    unit = trials.units.get(ch, "")
+    axis = _AXIS_NAMES.get(ch, tuple(f"{ch}[{j}]" for j in range(n_axes)))
+    return [f"{a} [{unit}]" if unit else a for a in axis[:n_axes]]
+
+
 def _trial_paths(trials: TrialSet) -> tuple[np.ndarray, list[str]]:
     n = trials.n_trials
     group = np.asarray(trials.trial_meta.get("group", np.zeros(n, dtype=int))).astype(int)
@@ -273,24 +281,28 @@ def write_recording(
         if blueprint
         else None
     )
+    # What every trial shares is converted to Arrow once, not once per trial: the series styles
+    # (names per channel), the trial clocks (one per distinct onset) and the poses' colours/radii.
+    styles = {ch: rr.SeriesLines(names=_series_names(trials, ch)) for ch in channels}
+    scalar_time: dict[int, tuple[np.ndarray, list]] = {}
+    pose_time: dict[int, tuple[np.ndarray, list]] = {}
+    pose_style: dict[tuple[str, int], Any] = {}
     with recording(p, "armlab", bp) as rec:
         for i, base in enumerate(trial_paths):
             onset = int(onsets[i])
             start = max(0, onset - pre)
-            rows = _onset_aligned(onset, start, n_samples, step_scalar)
-            t = (rows - onset) / fs
-            time_col = [rr.TimeColumn(_TRIAL_TIMELINE, duration=t)]
+            if onset not in scalar_time:
+                rows = _onset_aligned(onset, start, n_samples, step_scalar)
+                scalar_time[onset] = (rows, [rr.TimeColumn(_TRIAL_TIMELINE, duration=(rows - onset) / fs)])
+            rows, time_col = scalar_time[onset]
             for ch in channels:
                 x = trials.channels[ch][i, rows, :]
                 n_axes = x.shape[1]
-                unit = trials.units.get(ch, "")
-                axis = _AXIS_NAMES.get(ch, tuple(f"{ch}[{j}]" for j in range(n_axes)))
-                names = [f"{a} [{unit}]" if unit else a for a in axis[:n_axes]]
-                rec.log(f"{base}/{ch}", rr.SeriesLines(names=names), static=True)
+                rec.log(f"{base}/{ch}", styles[ch], static=True)
                 rec.send_columns(
                     f"{base}/{ch}",
                     indexes=time_col,
-                    columns=rr.Scalars.columns(scalars=_f32(x).ravel()).partition(np.full(t.size, n_axes)),
+                    columns=rr.Scalars.columns(scalars=_f32(x).ravel()).partition(np.full(rows.size, n_axes)),
                 )
             k = int(group[i])
             desc = [f"k={k}"] + [f"{name}={meta[name][i]}" for name in ("direction", "T_k_s") if name in meta]
@@ -305,18 +317,24 @@ def write_recording(
                 columns=rr.TextLog.columns(text=texts, level=["INFO"] * len(texts)),
             )
             if base in pose_entities:
-                idx = _onset_aligned(onset, start, n_samples, step_3d)
-                pose_time = [rr.TimeColumn(_TRIAL_TIMELINE, duration=(idx - onset) / fs)]
+                if onset not in pose_time:
+                    idx = _onset_aligned(onset, start, n_samples, step_3d)
+                    pose_time[onset] = (idx, [rr.TimeColumn(_TRIAL_TIMELINE, duration=(idx - onset) / fs)])
+                idx, idx_time = pose_time[onset]
                 for c, name, colour, radius in poses:
+                    if (c, idx.size) not in pose_style:
+                        pose_style[c, idx.size] = list(
+                            rr.LineStrips3D.columns(
+                                colors=np.tile(colour, (idx.size, 1)),
+                                radii=np.full(idx.size, radius, np.float32),
+                            )
+                        )
+                    # one (n_points, 3) strip per row: the strips go to rerun as one NumPy array
                     pts = np.asarray(trials.channels[c][i, idx, :], dtype=np.float32).reshape(idx.size, -1, 3)
                     rec.send_columns(
                         f"{base}/pose/{name}",
-                        indexes=pose_time,
-                        columns=rr.LineStrips3D.columns(
-                            strips=list(pts),
-                            colors=np.tile(colour, (idx.size, 1)),
-                            radii=np.full(idx.size, radius, np.float32),
-                        ),
+                        indexes=idx_time,
+                        columns=[*rr.LineStrips3D.columns(strips=pts), *pose_style[c, idx.size]],
                     )
         if windows:
             w_idx = [

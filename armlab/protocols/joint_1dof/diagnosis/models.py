@@ -21,10 +21,13 @@ Fitting is the core's variable projection (:func:`armlab.diagnosis.families.fit_
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 from scipy import signal
 
 from armlab.diagnosis.families import ModelFamily, NLParam, Surrogate, lowpass2, sensor_lowpass, shift_columns
+from armlab.dsp import bilinear
 from armlab.protocols.joint_1dof.diagnosis.data import PreparedTrial
 
 __all__ = [
@@ -67,9 +70,30 @@ def _compliance(tr: PreparedTrial, tau2: float, tau1: float, ratio: float) -> np
     """
     num = [ratio * tau2, ratio * tau1, ratio]
     den = [tau2, tau1, 1.0 + ratio]
-    b, a = signal.bilinear(num, den, tr.raw_fs_hz)
+    b, a = bilinear(num, den, tr.raw_fs_hz)
     x0 = tr.x_raw[0]
     return tr.to_fit_rate(signal.lfilter(b, a, tr.x_raw - x0) + ratio / (1.0 + ratio) * x0)
+
+
+@lru_cache(maxsize=192)  # 6 trials x 3 effects x a few parameter sets in flight (~150 kB each)
+def _effect_column(tr: PreparedTrial, name: str, values: tuple[float, ...]) -> np.ndarray:
+    """One effect's regressor column(s) of one trial, remembered (read-only).
+
+    A search moves one effect's parameters at a time (the grid of the newest effect, one finite
+    difference per parameter): the other effects' columns repeat, and they are the costly part of
+    an evaluation (a spectral shift, a raw-rate filter and decimation). ``tr`` is compared by
+    identity (prepared trials are frozen).
+    """
+    if name == "reflex":
+        d, s, cutoff = values
+        stretch = np.maximum(s * shift_columns(tr.t_s, tr.v, d), 0.0)
+        out = s * lowpass2(stretch, cutoff, 0.7, tr.fs_hz)
+    elif name == "joint_friction":
+        out = tr.to_fit_rate(_friction(tr.v_raw, *values, tr.raw_fs_hz))
+    else:  # a compliance: (tau2, tau1, ratio)
+        out = _compliance(tr, *values)
+    out.flags.writeable = False
+    return out
 
 
 def _columns(tr: PreparedTrial, model: tuple[Surrogate, ...], theta: dict[str, float]) -> np.ndarray:
@@ -78,26 +102,17 @@ def _columns(tr: PreparedTrial, model: tuple[Surrogate, ...], theta: dict[str, f
     cols: list[np.ndarray]
     if "cuff_compliance" in names or "transmission_compliance" in names:
         key = "cuff_compliance" if "cuff_compliance" in names else "transmission_compliance"
-        h = _compliance(tr, theta[f"{key}.tau2_s2"], theta[f"{key}.tau1_s"], theta[f"{key}.ratio"])
+        values = (theta[f"{key}.tau2_s2"], theta[f"{key}.tau1_s"], theta[f"{key}.ratio"])
+        h = _effect_column(tr, "compliance", values)
         cols = [h, tr.a] if key == "cuff_compliance" else [h]
     else:
         cols = [tr.a, tr.v, tr.x]
     if "reflex" in names:
-        d = theta["reflex.delay_s"]
-        s = theta["reflex.direction"]
-        stretch = np.maximum(s * shift_columns(tr.t_s, tr.v, d), 0.0)
-        cols.append(s * lowpass2(stretch, theta["reflex.cutoff_hz"], 0.7, tr.fs_hz))
+        values = (theta["reflex.delay_s"], theta["reflex.direction"], theta["reflex.cutoff_hz"])
+        cols.append(_effect_column(tr, "reflex", values))
     if "joint_friction" in names:
-        cols.append(
-            tr.to_fit_rate(
-                _friction(
-                    tr.v_raw,
-                    theta["joint_friction.velocity_rad_s"],
-                    theta["joint_friction.release_s"],
-                    tr.raw_fs_hz,
-                )
-            )
-        )
+        values = (theta["joint_friction.velocity_rad_s"], theta["joint_friction.release_s"])
+        cols.append(_effect_column(tr, "joint_friction", values))
     if "cocontraction_variation" in names:
         cols += [tr.m * tr.x, tr.m * tr.v]
     phi = np.stack(cols, axis=1)
