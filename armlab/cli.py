@@ -167,7 +167,7 @@ def _diagnose(args: list[str], show: bool) -> int:
     from armlab.runner.progress import display
 
     out, args = take_out(args, "diagnose")
-    named, rest = _keyed(args, ("data", "protocol", "units"), ("diagnosis",))
+    named, rest = _keyed(args, ("data", "protocol", "out", "units"), ("diagnosis",))  # out= taken above
     missing = [k for k in ("data", "protocol") if not named.get(k)]
     if missing:
         return _fail(f"diagnose needs {missing}: armlab diagnose data=<file|folder> protocol=<name>")
@@ -242,7 +242,7 @@ def _benchmark(args: list[str], show: bool) -> int:
     from armlab.runner.progress import display
 
     out, args = take_out(args, "diagnose-benchmark")
-    _, rest = _keyed(args, (), ("referee", "diagnosis"))
+    _, rest = _keyed(args, ("out",), ("referee", "diagnosis"))  # out= taken above
     with display(show):
         out, summary = run_benchmark(rest, out or default_out("diagnose-benchmark"))
     print((out / "benchmark.md").read_text())
