@@ -31,15 +31,24 @@ def _quat_to_mat(q: np.ndarray) -> np.ndarray:
 def _axis_rotation(axis: np.ndarray, angle: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     """(..., 3, 3) rotations about a fixed unit ``axis`` by ``angle`` (...,) rad (Rodrigues).
 
-    ``out`` (..., 3, 3), if given, receives the result (no temporary of that size is made).
+    ``out`` (..., 3, 3), if given, receives the result. Entry by entry, I + sin(a) K + (1 - cos(a))
+    K² in that order of operations; an entry where K and K² are both zero is I's exactly
+    (0 + (±0) + (+0) = +0 for finite angles), so only the others are computed: 4-5 of 9 for the
+    robot's axes along a frame direction.
     """
     k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+    kk = k @ k
     if out is None:
         out = np.empty(np.shape(angle) + (3, 3))
-    # I + sin(a) K + (1 - cos(a)) K^2, each operation element-wise in that order
-    np.multiply(np.sin(angle)[..., None, None], k, out=out)
-    np.add(np.eye(3), out, out=out)
-    out += (1 - np.cos(angle))[..., None, None] * (k @ k)
+    s = np.sin(angle)
+    omc = 1 - np.cos(angle)
+    for r in range(3):
+        for c in range(3):
+            eye = 1.0 if r == c else 0.0
+            if k[r, c] == 0 and kk[r, c] == 0:
+                out[..., r, c] = eye
+            else:
+                out[..., r, c] = eye + s * k[r, c] + omc * kk[r, c]
     return out
 
 
