@@ -23,8 +23,11 @@ test: $(STAMP)
 
 # adds the slow tests, among them 3-job multiruns through the Ray and submitit launchers (the
 # optional extras armlab[ray] and armlab[slurm], installed here)
-test-all: $(STAMP)
+$(VENV)/.extras: $(STAMP) pyproject.toml
 	$(BIN)/python -m pip install --quiet -e ".[dev,ray,slurm]"
+	touch $(VENV)/.extras
+
+test-all: $(VENV)/.extras
 	$(BIN)/python -m pytest -q -m "slow or not slow"
 
 # the observation-window sweep CI gates on (.ci/window_sweep.py; docs/ci_window_sweep.md), then

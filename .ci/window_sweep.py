@@ -75,7 +75,7 @@ def run_sweep(out: Path, windows: list[int], jobs: int) -> None:
     sweep = "scenario.k_values=" + ",".join(f"[{k}]" for k in windows)
     launcher = ["hydra/launcher=joblib", f"hydra.launcher.n_jobs={jobs}"] if jobs > 1 else []
     cmd = [sys.executable, "-c", "from armlab.cli import main; raise SystemExit(main())"]
-    cmd += ["run", "--multirun", *REDUCED, sweep, *launcher, f"out={out}"]
+    cmd += ["run", "--multirun", *REDUCED, sweep, *launcher, f"out={out}", "progress=false"]  # captured
     t0 = time.perf_counter()
     proc = subprocess.run(cmd, capture_output=True, text=True)
     if proc.returncode != 0:

@@ -79,10 +79,16 @@ def run(
     """
     from omegaconf import OmegaConf
 
-    from armlab.data.outdir import default_out
+    from armlab.data.outdir import default_out, take_out
+    from armlab.errors import ConfigError
     from armlab.protocols.compose import check_effects, compose, split_protocol
     from armlab.runner.resume import prepare_run_dir
     from armlab.runner.run import run_protocol
+
+    given, overrides = take_out(list(overrides), "run")  # out= in the list as on the command line;
+    if given is not None and out is not None:  # hydra.run.dir= refused, naming out= (armlab.data.outdir)
+        raise ConfigError(f"the run folder is given twice (out={out} and out={given} in overrides)")
+    out = given if out is None else out
 
     items = [*([f"protocol={protocol}"] if protocol else []), *overrides]
     cfg, exp = compose(items)

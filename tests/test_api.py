@@ -83,6 +83,12 @@ def test_run_refuses_bad_overrides_and_used_folders_before_writing(registered, t
     (own / "notes.txt").write_text("mine")
     with pytest.raises(DataError, match="not an armlab run folder"):
         armlab.run(toy.NAME, out=own)
+    # the run folder is out= here as on the command line: Hydra's spelling is refused, not ignored
+    with pytest.raises(ConfigError, match="out=elsewhere instead of hydra.run.dir"):
+        armlab.run(toy.NAME, ["hydra.run.dir=elsewhere"], out=tmp_path / "x")
+    with pytest.raises(ConfigError, match="given twice"):
+        armlab.run(toy.NAME, [f"out={tmp_path / 'y'}"], out=tmp_path / "x")
+    assert not (tmp_path / "x").exists() and not (tmp_path / "y").exists()
 
 
 def test_diagnose_returns_the_results_it_writes(registered, tmp_path):

@@ -36,7 +36,10 @@ def test_take_out_refuses_old_spellings_repeats_and_empty_folders(args, words):
 
 
 @pytest.mark.parametrize(
-    "folder", ["outputs/run_1", "/tmp/a b", "sweeps/a,b", "x[1]", "runs/${now:%H}", "é/ü", "a=b"]
+    "folder",
+    # 1e3, true, null, 123: Hydra reads them unquoted as a float, a bool, None, an int
+    ["outputs/run_1", "/tmp/a b", "sweeps/a,b", "x[1]", "runs/${now:%H}", "é/ü", "a=b"]
+    + ["1e3", "true", "null", "123"],
 )
 @pytest.mark.parametrize("multirun", [False, True])
 def test_hydra_reads_the_override_as_the_literal_folder(folder, multirun):
@@ -45,6 +48,10 @@ def test_hydra_reads_the_override_as_the_literal_folder(folder, multirun):
     assert parsed.key_or_group == ("hydra.sweep.dir" if multirun else "hydra.run.dir")
     assert not parsed.is_sweep_override()  # a comma in a folder name is not a sweep
     assert parsed.value() == folder
+
+
+def test_take_out_expands_the_home_folder():
+    assert take_out(["out=~/runs"], "run")[0] == Path.home() / "runs"
 
 
 def test_hydra_out_refuses_what_hydra_cannot_quote():

@@ -183,6 +183,27 @@ def test_every_verb_recognises_an_incomplete_folder(verb, incomplete, registered
     assert _snapshot(incomplete) == before and not Path(f"{incomplete}_diag").exists()
 
 
+@pytest.mark.parametrize(
+    ("files", "argv", "words"),
+    [
+        ({"notes.txt": "mine"}, [], "is not an armlab run folder"),
+        ({"notes.txt": "mine", "multirun.yaml": "mine"}, ["resume=true"], "is not an armlab run folder"),
+        ({"multirun.yaml": "hydra: {}"}, [], "holds the record of another sweep"),
+    ],
+    ids=["own-file", "own-file-resume", "old-sweep-record"],
+)
+def test_a_sweep_never_writes_into_a_folder_of_other_files(files, argv, words, tmp_path, capsys):
+    """The sweep folder itself, not only its job folders: the user's files and another sweep's
+    multirun.yaml (Hydra would replace it) are refused before anything is written."""
+    for name, text in files.items():
+        (tmp_path / name).write_text(text)
+    before = _snapshot(tmp_path)
+    assert main(["run", "--multirun", *argv, "seed=0,1", f"out={tmp_path}"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("armlab: error:") == 1 and words in err
+    assert _snapshot(tmp_path) == before
+
+
 def test_partial_files_keep_the_metadata_and_log(incomplete):
     assert run_state(incomplete) == "incomplete"
     names = {p.name for p in partial_files(incomplete)}

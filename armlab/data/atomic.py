@@ -53,6 +53,12 @@ def publish(tmp: Path, path: Path, overwrite: bool = False) -> None:
         os.replace(tmp, path)
 
 
+# the process umask, read once at import: reading it means setting it, which is not thread-safe
+# (a thread creating a file between the two calls would get mode 0666), so never per write
+_UMASK = os.umask(0)
+os.umask(_UMASK)
+
+
 @contextmanager
 def atomic_path(path: str | os.PathLike[str], overwrite: bool = False) -> Iterator[Path]:
     """Yield a temporary path to write ``path``'s content to; publish it when the block succeeds.
@@ -71,10 +77,8 @@ def atomic_path(path: str | os.PathLike[str], overwrite: bool = False) -> Iterat
     fd, name = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=TEMP_SUFFIX)
     os.close(fd)
     tmp = Path(name)
-    umask = os.umask(0)  # mkstemp makes the file private; give it the permissions of open()
-    os.umask(umask)
     try:
-        tmp.chmod(0o666 & ~umask)
+        tmp.chmod(0o666 & ~_UMASK)  # mkstemp makes the file private; give it the permissions of open()
         yield tmp
         publish(tmp, path, overwrite)
     finally:

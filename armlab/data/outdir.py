@@ -10,7 +10,6 @@ names ``out=``: there is one way to say it.
 
 from __future__ import annotations
 
-import re
 from datetime import datetime
 from pathlib import Path
 
@@ -20,9 +19,6 @@ __all__ = ["OLD_SPELLINGS", "default_out", "hydra_out", "take_out"]
 
 #: Hydra's spellings of the output folder, refused in favour of ``out=``
 OLD_SPELLINGS = ("hydra.run.dir", "hydra.sweep.dir")
-
-#: a folder Hydra's override grammar reads unquoted (anything else is passed quoted)
-_PLAIN = re.compile(r"[A-Za-z0-9_./~:@+-]+")
 
 
 def default_out(name: str) -> Path:
@@ -65,7 +61,7 @@ def take_out(args: list[str], verb: str) -> tuple[Path | None, list[str]]:
             f"`armlab {verb} out=` needs a folder (e.g. out=outputs/my_{verb.replace('-', '_')}); "
             "leave out= away for a new timestamped one"
         )
-    return Path(value.strip("'\"")), rest
+    return Path(value.strip("'\"")).expanduser(), rest
 
 
 def hydra_out(out: Path, *, multirun: bool) -> str:
@@ -76,8 +72,8 @@ def hydra_out(out: Path, *, multirun: bool) -> str:
     """
     key = "hydra.sweep.dir" if multirun else "hydra.run.dir"
     text = str(out)
-    if _PLAIN.fullmatch(text):
-        return f"{key}={text}"
     if "'" in text or "\\" in text:
         raise ConfigError(f"out={text}: a folder name with a quote or backslash cannot be passed to Hydra")
-    return f"{key}='{text}'"  # commas, spaces, brackets: a literal folder name, not a sweep
+    # always quoted: Hydra reads an unquoted 1e3 as a float (folder 1000.0), true as a bool, a
+    # comma as a sweep; a quoted value is the literal string (${now:...} is still resolved)
+    return f"{key}='{text}'"

@@ -64,10 +64,6 @@ def _check(protocol: Protocol, overrides: list[str]) -> None:
                 f"{item}: armlab sets Hydra's existing settings and groups (e.g. hydra/launcher=joblib, "
                 f"hydra.launcher.n_jobs=2) but adds none; drop the '+'"
             )
-        if bare in ("hydra.run.dir", "hydra.sweep.dir") and not value.strip().strip("'\"").strip():
-            raise ConfigError(
-                f"{item}: give a folder (e.g. {bare}=outputs/my_run); an empty one is the working folder"
-            )
         if bare in seen:
             raise ConfigError(f"{bare} is given twice ({seen[bare]!r} and {item!r}); give it once")
         seen[bare] = item

@@ -81,15 +81,23 @@ def stored_overrides(folder: Path) -> tuple[str, list[str]] | None:
     return str(cfg.get("protocol_name")), [str(o) for o in OmegaConf.load(meta / "overrides.yaml")]
 
 
+#: what a sweep folder holds besides its job folders: Hydra's record of the sweep and submitit's logs
+_SWEEP_RECORDS = ("multirun.yaml", ".submitit")
+
+
 def sweep_jobs(sweep_dir: Path) -> dict[str, list[str]]:
     """The job folders (``hydra.sweep.subdir``: the job number) of a sweep folder by state:
-    ``{"complete": [...], "incomplete": [...], "foreign": [...]}``."""
+    ``{"complete": [...], "incomplete": [...], "foreign": [...]}``; any entry that is neither a job
+    folder nor a sweep record (``multirun.yaml``, ``.submitit``) counts as foreign too."""
     jobs: dict[str, list[str]] = {"complete": [], "incomplete": [], "foreign": []}
     sweep_dir = Path(sweep_dir)
     if not sweep_dir.is_dir():
         return jobs
     for p in sorted(sweep_dir.iterdir()):
-        state = run_state(p) if p.is_dir() and p.name.isdigit() else "new"
+        if p.is_dir() and p.name.isdigit():
+            state = run_state(p)
+        else:
+            state = "new" if p.name in _SWEEP_RECORDS else "foreign"
         if state != "new":
             jobs[state].append(p.name)
     return jobs
@@ -126,8 +134,9 @@ def plan_launch(overrides: list[str], *, multirun: bool, resume: bool) -> tuple[
         return overrides, None  # a fresh timestamped folder
     if multirun:
         jobs = sweep_jobs(folder)
-        if jobs["foreign"]:
-            raise refusal(folder / jobs["foreign"][0], "foreign")
+        if jobs["foreign"]:  # a job folder that is not a run, or the user's own files
+            name = jobs["foreign"][0]
+            raise refusal(folder / name if name.isdigit() else folder, "foreign")
         if not resume and (jobs["complete"] or jobs["incomplete"]):
             raise DataError(
                 f"sweep folder {folder} already holds jobs (complete: {jobs['complete']}, incomplete: "
@@ -136,6 +145,11 @@ def plan_launch(overrides: list[str], *, multirun: bool, resume: bool) -> tuple[
                 "out=<folder>"
             )
         stored_file = folder / "multirun.yaml"
+        if not resume and stored_file.is_file():  # Hydra would replace the record of that sweep
+            raise DataError(
+                f"sweep folder {folder} holds the record of another sweep ({stored_file.name}); add "
+                "resume=true to finish that sweep, or choose a new out=<folder>"
+            )
         stored = None
         if resume and stored_file.is_file():
             cfg = OmegaConf.load(stored_file)

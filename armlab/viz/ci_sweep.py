@@ -17,12 +17,12 @@ _CRITERIA = (
     ("symmetric", "symmetric_from_s", "symm."),
     ("constant", "constant_from_s", "const."),
 )
-_ERRORS = (("K_err", "K"), ("D_err", "D"), ("xi_err", "ξ"))
+_ERRORS = (("K_err", "K"), ("D_err", "D"), ("xi_err", "ξ"))  # against the intrinsic truth
 
 
 def plot_ci_window_sweep(summary: dict, baseline: dict | None, path: Path) -> Path:
     """Two panels: where each criterion holds (filled: holds; the line: first met, dashed: baseline),
-    and the relative errors against the effective truth (dots: baseline at the longest window)."""
+    and the relative errors against the intrinsic truth (circles: baseline at the longest window)."""
     t_ms = np.array([w["t_obs_s"] for w in summary["windows"]]) * 1e3
     models = list(summary["first_met"])
     fig = Figure(figsize=(10.0, 6.4), layout="constrained")
@@ -50,6 +50,6 @@ def plot_ci_window_sweep(summary: dict, baseline: dict | None, path: Path) -> Pa
                 ax_e.plot(t_ms[-1], baseline["longest"][model][key] * 100, "o", mfc="none", color=color)
     ax_e.set_yscale("log")
     ax_e.set_xlabel("T_obs (ms)")
-    ax_e.set_ylabel("error vs effective truth (%)")
+    ax_e.set_ylabel("error vs intrinsic truth (%)")
     ax_e.legend(fontsize=8, ncol=2)
     return save_png(fig, path)

@@ -173,24 +173,53 @@ def _entry(est: LSEstimate, truth: dict | None, fit, reduced: bool) -> dict:
     return out
 
 
-def _criteria(t_obs: np.ndarray, ests: list[LSEstimate], cfg: EstimatorConfig) -> dict:
-    pd = np.array([criteria.is_positive_definite(e.K) for e in ests])
-    sym = np.array(
-        [
-            criteria.asymmetry(e.K) < cfg.symmetry_tol and criteria.asymmetry(e.D) < cfg.symmetry_tol
-            for e in ests
-        ]
-    )
-    params = np.stack([e.zeta for e in ests])
-    if cfg.constancy_tol_per_s is None:  # per window step (the windows' spacing ignored)
-        const = criteria.quasi_constant_flags(params, cfg.constancy_tol)
+def criteria_flags(
+    t_obs: np.ndarray,
+    K: list[np.ndarray],
+    D: list[np.ndarray],
+    params: np.ndarray,
+    *,
+    symmetry_tol: float,
+    constancy_tol: float,
+    constancy_tol_per_s: float | None,
+) -> dict[str, np.ndarray]:
+    """Per window, whether each criterion of section IV-D holds: ``{"K_pd", "symmetric",
+    "constant"}`` of (n_windows,) bool. ``K``, ``D``: the windows' estimates; ``params``:
+    (n_windows, c) their parameter vectors in the estimator's order (Eq. 10 or 23). Used by the run
+    and by CI's window sweep (:mod:`.window_sweep`), which judges jobs' results.json the same way."""
+    sym = [
+        criteria.asymmetry(k) < symmetry_tol and criteria.asymmetry(d) < symmetry_tol
+        for k, d in zip(K, D, strict=True)
+    ]
+    if constancy_tol_per_s is None:  # per window step (the windows' spacing ignored)
+        const = criteria.quasi_constant_flags(params, constancy_tol)
     else:  # per second of T_obs: 10 ms steps and 30-50 ms extension steps judged alike
-        const = criteria.quasi_constant_flags(params, cfg.constancy_tol_per_s, t_obs=t_obs)
+        const = criteria.quasi_constant_flags(params, constancy_tol_per_s, t_obs=t_obs)
     return {
-        "K_pd_from_s": criteria.first_satisfied(t_obs, pd),
-        "symmetric_from_s": criteria.first_satisfied(t_obs, sym),
-        "constant_from_s": criteria.first_satisfied(t_obs, const),
+        "K_pd": np.array([criteria.is_positive_definite(k) for k in K]),
+        "symmetric": np.array(sym),
+        "constant": const,
     }
+
+
+def first_met(t_obs: np.ndarray, flags: dict[str, np.ndarray]) -> dict[str, float | None]:
+    """The window from which each criterion holds for it and every longer one (results.json's
+    ``criteria``): ``{"K_pd_from_s", "symmetric_from_s", "constant_from_s"}``."""
+    names = ("K_pd", "symmetric", "constant")
+    return {f"{name}_from_s": criteria.first_satisfied(t_obs, flags[name]) for name in names}
+
+
+def _criteria(t_obs: np.ndarray, ests: list[LSEstimate], cfg: EstimatorConfig) -> dict:
+    flags = criteria_flags(
+        t_obs,
+        [e.K for e in ests],
+        [e.D for e in ests],
+        np.stack([e.zeta for e in ests]),
+        symmetry_tol=cfg.symmetry_tol,
+        constancy_tol=cfg.constancy_tol,
+        constancy_tol_per_s=cfg.constancy_tol_per_s,
+    )
+    return first_met(t_obs, flags)
 
 
 def estimate_protocol(

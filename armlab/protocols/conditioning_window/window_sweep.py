@@ -3,9 +3,9 @@
 ``armlab run --multirun protocol=conditioning_window scenario.k_values=[1],[2],...`` runs each
 window of the paper (T_obs = T_k + 70 ms; the last group also carries the extension windows) as
 its own job. :func:`summarise` gathers the jobs' ``results.json`` into one table ordered by T_obs
-and judges the paper's criteria (section IV-D) across the whole sweep with the protocol's own
-functions (:mod:`armlab.estimation.criteria`); :func:`gate` compares a summary with a committed
-baseline and lists what moved: the window at which a criterion is first met (by more than
+and judges the paper's criteria (section IV-D) across the whole sweep as a run does
+(:func:`.experiment.criteria_flags`); :func:`gate` compares a summary with a committed baseline
+and lists what moved: the window at which a criterion is first met (by more than
 ``max_window_shift`` windows) and the error of K, D and xi against the truth at the longest window
 (by more than ``error_margin``).
 
@@ -24,6 +24,7 @@ import numpy as np
 
 from armlab.errors import DataError
 from armlab.estimation import criteria
+from armlab.protocols.conditioning_window.experiment import criteria_flags, first_met
 
 __all__ = ["CRITERIA", "MODELS", "gate", "read_jobs", "summarise"]
 
@@ -92,13 +93,15 @@ def summarise(jobs: list[dict]) -> dict:
     first, longest = {}, {}
     for model in MODELS:
         est = [w if model == "full" else w["reduced"] for w in entries]
-        pd = np.array([criteria.is_positive_definite(np.asarray(e["K"])) for e in est])
-        sym = np.array([max(e["asym_K"], e["asym_D"]) < tolerances["symmetry_tol"] for e in est])
-        params = np.stack([_params(w, model) for w in entries])
-        if tolerances.get("constancy_tol_per_s") is None:  # per window step, as the protocol judges it
-            const = criteria.quasi_constant_flags(params, tolerances["constancy_tol"])
-        else:
-            const = criteria.quasi_constant_flags(params, tolerances["constancy_tol_per_s"], t_obs=t_obs)
+        flags = criteria_flags(  # the protocol's own judgement, on the jobs' stored estimates
+            t_obs,
+            [np.asarray(e["K"]) for e in est],
+            [np.asarray(e["D"]) for e in est],
+            np.stack([_params(w, model) for w in entries]),
+            symmetry_tol=tolerances["symmetry_tol"],
+            constancy_tol=tolerances["constancy_tol"],
+            constancy_tol_per_s=tolerances.get("constancy_tol_per_s"),
+        )
         errors = {  # against the intrinsic truth (the model's own, independent of the estimator)
             "K_err": [e["K_err_intrinsic"] for e in est],  # and the effective one (results_schema.md)
             "D_err": [e["D_err_intrinsic"] for e in est],
@@ -112,15 +115,10 @@ def summarise(jobs: list[dict]) -> dict:
             ]
         for i, row in enumerate(rows):
             row[model] = {
-                "K_pd": bool(pd[i]),
-                "symmetric": bool(sym[i]),
-                "constant": bool(const[i]),
+                **{name: bool(f[i]) for name, f in flags.items()},
                 **{k: float(v[i]) for k, v in errors.items()},
             }
-        first[model] = {
-            name: criteria.first_satisfied(t_obs, flags)
-            for name, flags in zip(CRITERIA, (pd, sym, const), strict=True)
-        }
+        first[model] = first_met(t_obs, flags)
         longest[model] = {k: float(v[-1]) for k, v in errors.items()}
     return {
         "windows": rows,
