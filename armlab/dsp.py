@@ -72,7 +72,8 @@ def butterworth(
     Returns:
         The sections, or ``(b, a)``.
     """
-    cutoff = tuple(float(c) for c in cutoff_hz) if isinstance(cutoff_hz, (tuple, list)) else float(cutoff_hz)
+    # a hashable key for the remembered design; a pair (band-pass) as list, tuple or array
+    cutoff = tuple(map(float, np.ravel(cutoff_hz))) if np.ndim(cutoff_hz) else float(cutoff_hz)
     out = _butter(int(order), cutoff, btype, float(fs_hz), output)
     return tuple(a.copy() for a in out) if isinstance(out, tuple) else out.copy()
 

@@ -188,3 +188,31 @@ def test_savgol_interior_is_the_convolution_with_its_taps():
         assert_allclose(savgol(x, FS, 31, 4, deriv=deriv)[half:-half], inner, atol=1e-9 * FS**deriv)
     assert np.sum(savgol_taps(FS, 31, 4)) == pytest.approx(1.0, abs=1e-9)  # unit DC gain
     assert np.sum(savgol_taps(FS, 31, 4, deriv=1)) == pytest.approx(0.0, abs=1e-6)  # kills constants
+
+
+def test_the_remembered_designs_are_handed_out_as_copies():
+    """dsp.butterworth and dsp.bilinear remember designs (a fit asks for the same few thousands of
+    times): a caller changing its copy must not change what the next caller gets."""
+    from armlab.dsp import bilinear, butterworth
+
+    sos = butterworth(10.0, 1000.0, 2)
+    sos[:] = 0.0
+    assert np.any(butterworth(10.0, 1000.0, 2) != 0.0)
+    b, a = bilinear([1.0], [0.05, 1.0], 1000.0)
+    b[:] = 0.0
+    assert np.any(bilinear([1.0], [0.05, 1.0], 1000.0)[0] != 0.0)
+
+
+def test_a_remembered_spectrum_is_never_handed_out_for_a_changed_signal():
+    """The padded-spectrum memory of the diagnosis's delay search: a signal changed in place (same
+    object, same shape, same pad) must get its own spectrum, equal to one computed afresh."""
+    from armlab.diagnosis.families import _padded_spectrum
+
+    rng = np.random.default_rng(0)
+    z = rng.standard_normal(500)
+    first = _padded_spectrum(z, 7).copy()
+    z[100] += 1.0  # the same array, changed
+    again = _padded_spectrum(z, 7)
+    fresh = np.fft.rfft(np.concatenate([np.full(7, z[0]), z, np.full(7, z[-1])]))
+    np.testing.assert_array_equal(again, fresh)
+    assert not np.array_equal(again, first)

@@ -113,23 +113,29 @@ def shift_columns(t: np.ndarray, z: np.ndarray, delay: float) -> np.ndarray:
 # The last spectra of padded signals, most recently used last: (signal copy, pad, spectrum). A fit
 # shifts the same signal (a trial's velocity; the stacked regressor of a delay search whose other
 # columns are fixed) by many delays, and delays a finite difference apart share the pad, hence
-# the spectrum. A hit needs an equal signal (compared exactly), so the cache cannot go stale.
+# the spectrum. A hit needs an equal signal (a stored copy, compared exactly), so it cannot go
+# stale. Only signals up to _SPECTRUM_MAX_BYTES are kept: the joint fits' 1-D signals hit (1582 of
+# 1640 look-ups on the referee); the conditioning diagnosis's stacked (850, 660) regressors hit 54
+# of 185 and held ~220 MB at no gain in time (measured in review), so they are not cached.
 _SPECTRA: list[tuple[np.ndarray, int, np.ndarray]] = []
 _SPECTRA_KEPT = 24  # a few pads of each trial's signals in a fit (6 trials in the REKLAB folder)
+_SPECTRUM_MAX_BYTES = 1 << 20  # bytes of signal: a 30 s trial at 1 kHz in float64 is 240 kB
 
 
 def _padded_spectrum(z: np.ndarray, pad: int) -> np.ndarray:
     """``rfft`` along axis 0 of ``z`` padded by ``pad`` copies of its end values on each side."""
-    for i in range(len(_SPECTRA) - 1, -1, -1):
+    kept = z.nbytes <= _SPECTRUM_MAX_BYTES
+    for i in range(len(_SPECTRA) - 1, -1, -1) if kept else ():
         zc, pc, spec = _SPECTRA[i]
-        if pc == pad and zc.shape == z.shape and (zc is z or np.array_equal(zc, z)):
+        if pc == pad and zc.shape == z.shape and zc.dtype == z.dtype and np.array_equal(zc, z):
             _SPECTRA.append(_SPECTRA.pop(i))
             return spec
     zz = np.concatenate([np.repeat(z[:1], pad, axis=0), z, np.repeat(z[-1:], pad, axis=0)], axis=0)
     spec = np.fft.rfft(zz, axis=0)
     spec.flags.writeable = False
-    _SPECTRA.append((z if not z.flags.writeable else z.copy(), pad, spec))
-    del _SPECTRA[:-_SPECTRA_KEPT]
+    if kept:
+        _SPECTRA.append((z.copy(), pad, spec))
+        del _SPECTRA[:-_SPECTRA_KEPT]
     return spec
 
 

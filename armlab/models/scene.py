@@ -169,6 +169,10 @@ def compile_mjcf(
     except ValueError as exc:
         raise ModelError(f"composed {what} does not compile: {exc}") from None
     colliding = np.flatnonzero(model.geom_contype | model.geom_conaffinity)
+    if not contacts and model.npair:  # explicit <contact><pair>s would be dropped silently too
+        raise ModelError(
+            f"composed {what}: {model.npair} <contact><pair> elements, but the scene runs without contacts"
+        )
     if not contacts and colliding.size:
         names = [model.geom(int(g)).name or f"geom {g}" for g in colliding]
         raise ModelError(

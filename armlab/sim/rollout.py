@@ -173,7 +173,7 @@ def simulate(
 
     nsd = model.nsensordata
     nstate = mujoco.mj_stateSize(model, spec)
-    act_cols = 1 + model.nq + model.nv + scene.muscle_act
+    act_cols = 1 + model.nq + model.nv + model.actuator_actadr[scene.muscle_act]  # activations' places
     n_samples = n_steps // substeps
     sensordata = np.empty((n_trials, n_samples, nsd))
     activation = np.empty((n_trials, n_samples, len(MUSCLES)))

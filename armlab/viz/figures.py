@@ -23,7 +23,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from armlab.errors import ConfigError, DataError
-from armlab.viz._paths import save_png
+from armlab.viz._paths import DPI, save_png
 
 __all__ = [
     "plot_window_sweep",
@@ -31,7 +31,6 @@ __all__ = [
     "plot_error_vs_window",
 ]
 
-DPI = 120
 _MODELS = ("full", "reduced")
 _ENTRY_COLOURS = ("C0", "C1", "C2", "C3")
 _MATRIX_ENTRIES = ((0, 0), (0, 1), (1, 0), (1, 1))

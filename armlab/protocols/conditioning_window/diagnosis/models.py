@@ -28,6 +28,7 @@ import numpy as np
 from scipy import signal
 
 from armlab.diagnosis.families import ModelFamily, NLParam, Surrogate, lowpass2, sensor_lowpass, shift_columns
+from armlab.dsp import bilinear
 from armlab.estimation.joint_ls import PARAM_NAMES, regressor
 from armlab.estimation.processing import differentiate, lowpass_zero_phase
 from armlab.protocols.conditioning_window.diagnosis.data import CHANNELS, CondSet
@@ -59,7 +60,7 @@ def _spring_damper(cs: CondSet, tau_s: float) -> tuple[np.ndarray, np.ndarray, n
     """The stretch basis of a spring k in parallel with a damper b = k·tau_s: u / (1 + tau_s·s)."""
     if tau_s <= 0:
         return cs.u, cs.ud, cs.udd
-    b, a = signal.bilinear([1.0], [tau_s, 1.0], cs.fs_hz)
+    b, a = bilinear([1.0], [tau_s, 1.0], cs.fs_hz)
     u = signal.lfilter(b, a, cs.u, axis=1)
     ud, udd = differentiate(u, cs.fs_hz, axis=1)
     return u, ud, udd
