@@ -3,9 +3,10 @@
 Reports the wall time of the full protocol with its default configuration (as ``armlab run
 protocol=fractional_elbow`` composes it: 2 x 40 s trials at 2 kHz with 0.1 ms physics steps, the
 Hill elbow with its stretch reflex, all outputs), the simulation speed in simulated seconds per
-wall second (the force loop steps MuJoCo from Python once per 0.5 ms control period, the trials
-concurrently on threads: :mod:`armlab.sim.force_control`; the target is checked by
-``bench_realtime.py``), and the estimation time (Welch, Levy sweeps, five-element fits,
+wall second (the force loop's control periods run compiled and step MuJoCo in C, the trials
+concurrently on threads: :mod:`armlab.sim.force_kernel`; the target is checked by
+``bench_realtime.py``; the very first run on a machine also compiles the kernel, a few seconds
+that later runs read from numba's cache), and the estimation time (Welch, Levy sweeps, five-element fits,
 fractional sweep).
 """
 

@@ -123,10 +123,11 @@ def test_stretch_reflex_raises_activation_only_after_its_latency():
 
 def test_the_reflex_of_a_latency_of_periods_at_once_equals_one_period_at_a_time():
     # _MuscleCommands computes the delayed reflex lag1 periods at a time; each period's command
-    # must equal reflex_command on that period's lagged history (what the loop did per period)
+    # must equal reflex_command on that period's lagged history (what the loop did per period).
+    # Here the test plays the kernel: it records each period's actuator state, then reads the row
     from types import SimpleNamespace
 
-    from armlab.sim.force_control import _MuscleCommands
+    from armlab.sim.force_loop import _MuscleCommands
     from armlab.sim.rollout import reflex_command
 
     rng = np.random.default_rng(3)
@@ -143,7 +144,10 @@ def test_the_reflex_of_a_latency_of_periods_at_once_equals_one_period_at_a_time(
     for k in range(total):
         data.actuator_length[:] = lengths[k]
         data.actuator_velocity[:] = velocities[k]
-        cmd.apply(k)
+        rows, row0, stop = cmd.block(k)
+        assert row0 <= k < stop
+        cmd.hist_len[k], cmd.hist_vel[k] = lengths[k], velocities[k]  # what the kernel records
+        data.ctrl[muscles] = rows[k - row0]
         lagged = [max(k - lag1, 0), max(k - lag2, 0)]
         want = reflex_command(
             base[k], lengths[lagged][:, muscles], velocities[lagged][:, muscles], len_ref, reflex
@@ -184,3 +188,66 @@ def test_concurrent_trials_equal_serial_trials_bit_for_bit():
             "activation",
         ):
             np.testing.assert_array_equal(getattr(a, name), getattr(b, name))
+
+
+def test_the_kernel_steps_mujoco_as_the_bindings_do():
+    # the compiled kernel calls MuJoCo's C mj_step by name through the model's and data's
+    # addresses; stepping a scene N times that way must leave the state bit-identical to the
+    # bindings' own mujoco.mj_step (a wrong library, address or ABI would not)
+    import mujoco
+    from numba import njit
+
+    from armlab.sim import force_kernel
+
+    step = force_kernel._mj_step
+
+    @njit
+    def steps(mp, dp, n):
+        for _ in range(n):
+            step(mp, dp)
+
+    scene = build_direct_drive_scene(ElbowConfig(), SimConfig())
+    m = scene.model
+    a, b = mujoco.MjData(m), mujoco.MjData(m)
+    for d in (a, b):
+        d.ctrl[scene.motor_act] = 0.8  # A: the motor pushes the arm, the muscles hold
+        d.ctrl[scene.muscle_act] = 0.1
+    steps(*force_kernel.mj_pointers(m, a), 3000)
+    mujoco.mj_step(m, b, 3000)
+    assert a.time == b.time > 0.29
+    np.testing.assert_array_equal(a.qpos, b.qpos)
+    np.testing.assert_array_equal(a.qvel, b.qvel)
+    np.testing.assert_array_equal(a.act, b.act)
+    np.testing.assert_array_equal(a.sensordata, b.sensordata)
+    assert abs(a.qpos[scene.motor_qpos]) > 1e-3  # it moved
+
+
+@pytest.mark.parametrize("reflex", [False, True], ids=["no-reflex", "reflex"])
+def test_one_period_per_kernel_call_equals_blocks_of_periods(monkeypatch, reflex):
+    # the kernel runs blocks of periods (200, or up to the next reflex block); one period per call is the
+    # replay that names the period of a MuJoCo reset: both must give the same trial, bit for bit
+    from armlab.sim import force_loop
+
+    cfg = ElbowConfig()  # the Hill muscles, so the reflex and the muscle rows are exercised
+
+    def run():
+        return simulate_force_trial(
+            build_direct_drive_scene(cfg, SimConfig()),
+            _reference(0.6),
+            FS,
+            0.1,
+            cfg,
+            ReflexConfig(enabled=reflex),
+            DirectDriveConfig(),
+            JR3_FORCE,
+            DD_ENCODER,
+            np.random.default_rng(4),
+            muscle_base=np.full((int(0.7 * FS), 2), 0.05) + 1e-3 * np.arange(2),
+        )
+
+    blocks = run()
+    monkeypatch.setattr(force_loop, "_BLOCK_PERIODS", 1)  # caps the reflex's blocks too
+    single = run()
+    for name in ("f_measured", "f_true", "theta_measured", "theta_true", "phi_true", "current", "activation"):
+        np.testing.assert_array_equal(getattr(single, name), getattr(blocks, name), err_msg=name)
+    assert np.ptp(blocks.activation) > 0  # the muscle commands reached the muscles
