@@ -130,7 +130,8 @@ def robot_targets(
 
     The hand path of each direction, x(s) = f(q0 + s dq_f) for s in [0, 1], is solved by IK once
     on :data:`PATH_POINTS` points and spline-interpolated in s; every trial then evaluates it at
-    s(t) = quintic((t - t_onset) / T_k) (eq. 16), so durations share the path.
+    s(t) = quintic((t - t_onset) / T_k) (eq. 16), so durations share the path. Trials of the same
+    direction and T_k have the same targets: each such pair is evaluated once and copied.
 
     Args:
         t_rel: (n_steps,) s, time of each physics step relative to the onset.
@@ -143,11 +144,16 @@ def robot_targets(
     for dq_f in directions:
         path = hand_world(scene, q0 + s_grid[:, None] * dq_f)
         splines.append(CubicSpline(s_grid, solve_ik(scene, path, hold.robot_target), axis=0))
-    out = np.empty((plan.n_trials, t_rel.size, 7))
-    for i in range(plan.n_trials):
-        s, _, _ = quintic_profile(t_rel, float(plan.t_k_s[i]))
-        out[i] = splines[plan.direction[i]](s)
-    return out
+    pairs, which = np.unique(
+        np.stack([np.asarray(plan.direction, float), np.asarray(plan.t_k_s, float)], axis=1),
+        axis=0,
+        return_inverse=True,
+    )
+    table = np.empty((len(pairs), t_rel.size, 7))
+    for j, (direction, t_k) in enumerate(pairs):
+        s, _, _ = quintic_profile(t_rel, float(t_k))
+        table[j] = splines[int(direction)](s)
+    return table[np.asarray(which).reshape(-1)]
 
 
 def record_trials(
