@@ -21,7 +21,7 @@ from armlab.config.subject import SubjectConfig
 from armlab.errors import ConfigError
 from armlab.models.ground_truth import GroundTruth, ground_truth
 from armlab.models.robot_fk import RobotKinematics
-from armlab.models.scene import ROBOT_POINTS, Scene, build_scene
+from armlab.models.scene import MUSCLES, ROBOT_POINTS, Scene, build_scene
 from armlab.perturbations.quintic import quintic_profile
 from armlab.perturbations.scenario import Scenario, TrialPlan
 from armlab.sensors.channel import ChannelSpec, apply_channel
@@ -30,7 +30,7 @@ from armlab.sim.hold import HoldState, hand_world, settle
 from armlab.sim.robot_ik import solve_ik
 from armlab.sim.rollout import simulate
 from armlab.sim.stability import TrialLabels, check_bound
-from armlab.sim.subject import activation_commands
+from armlab.sim.subject import commands, fluctuation
 
 __all__ = [
     "CUFF_FORCE_BOUND_N",
@@ -180,32 +180,41 @@ def record_trials(
             f"effects {other} are not simulated by the {cfg.protocol_name} laboratory; it applies "
             f"{list(LAB_EFFECTS)} (reflex and cuff compliance are its reflex.* and cuff.* settings)"
         )
-    scene = build_scene(cfg.arm, cfg.cuff, cfg.robot, cfg.sim)
-    _apply_model_effects(scene, cfg.effects)
-    hold = settle(scene, cfg.arm, cfg.sim.settle_s, protocol=cfg.protocol_name)
-    truth = ground_truth(scene, hold.state, cfg.cuff.rigid)
-
     fs = cfg.sensors.fs_hz
-    dt = scene.model.opt.timestep
-    substeps = int(round(1.0 / (fs * dt)))
-    if substeps < 1 or abs(substeps * fs * dt - 1.0) > 1e-9:
-        raise ConfigError(
-            f"sensors.fs_hz={fs} must divide the physics rate 1/sim.timestep_s={1 / dt:g} Hz into whole steps"
-        )
     n_samples = int(round(scenario.record_s * fs))
-    onset = int(round(scenario.pre_onset_record_s * fs))
-    n_steps = n_samples * substeps
-    # sample j is the state after physics step (j + 1) * substeps - 1, i.e. at (j + 1) / fs on the
-    # step clock; the perturbation starts at sample `onset`, so at (onset + 1) / fs
-    t_rel = (np.arange(n_steps) + 1) * dt - (onset + 1) / fs
-    targets = robot_targets(scene, hold, np.asarray(cfg.arm.q0, float), plan, scenario.directions_rad, t_rel)
-    muscle_base = hold.activation
-    if subject is not None and subject.active:
-        if subject_rng is None:
-            raise ConfigError("an active subject fluctuation needs its own generator (subject_rng)")
-        muscle_base = activation_commands(
-            hold.activation, subject, plan.n_trials, n_steps, substeps, fs, subject_rng
+    active = subject is not None and subject.active
+    # The subject's fluctuation needs no scene: it is drawn on a second thread while the scene is
+    # built and settled and the robot paths are solved (its own generator: the same numbers).
+    with ThreadPoolExecutor(max_workers=1) as early:
+        drawing = (
+            early.submit(fluctuation, subject, plan.n_trials, n_samples, len(MUSCLES), fs, subject_rng)
+            if active and subject_rng is not None
+            else None
         )
+        scene = build_scene(cfg.arm, cfg.cuff, cfg.robot, cfg.sim)
+        _apply_model_effects(scene, cfg.effects)
+        hold = settle(scene, cfg.arm, cfg.sim.settle_s, protocol=cfg.protocol_name)
+        truth = ground_truth(scene, hold.state, cfg.cuff.rigid)
+
+        dt = scene.model.opt.timestep
+        substeps = int(round(1.0 / (fs * dt)))
+        if substeps < 1 or abs(substeps * fs * dt - 1.0) > 1e-9:
+            raise ConfigError(
+                f"sensors.fs_hz={fs} must divide the physics rate 1/sim.timestep_s={1 / dt:g} Hz "
+                "into whole steps"
+            )
+        onset = int(round(scenario.pre_onset_record_s * fs))
+        n_steps = n_samples * substeps
+        # sample j is the state after physics step (j + 1) * substeps - 1, i.e. at (j + 1) / fs on the
+        # step clock; the perturbation starts at sample `onset`, so at (onset + 1) / fs
+        t_rel = (np.arange(n_steps) + 1) * dt - (onset + 1) / fs
+        q0 = np.asarray(cfg.arm.q0, float)
+        targets = robot_targets(scene, hold, q0, plan, scenario.directions_rad, t_rel)
+        muscle_base = hold.activation
+        if active:
+            if subject_rng is None:
+                raise ConfigError("an active subject fluctuation needs its own generator (subject_rng)")
+            muscle_base = commands(hold.activation, drawing.result(), n_steps, substeps)
     who = TrialLabels(
         protocol=cfg.protocol_name,
         labels=tuple(
