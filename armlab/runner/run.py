@@ -62,16 +62,19 @@ def _run(cfg: ExperimentConfig, out_dir: Path, config_yaml: str, timing: dict) -
 
     protocol = registry.get(cfg.protocol_name, need="run")
     check_effects(protocol, cfg)
-    t0 = time.perf_counter()
-    progress.stage("simulate")  # each stage's size, where known, comes from the computation
-    sim = protocol.simulate(cfg)
-    timing["simulate_s"] = time.perf_counter() - t0
-    trials = sim.trials
-    # The trial file is compressed in a second thread (HDF5's deflate runs without the GIL) from the
-    # end of the simulation on, while the protocol estimates and then draws its figures and
-    # recording; leaving the block waits for it, so it is complete (or its error raised) before
+    # One background thread: rerun is imported while the protocol simulates (when the run records),
+    # then the trial file is compressed (HDF5's deflate runs without the GIL) from the end of the
+    # simulation on, while the protocol estimates and then draws its figures and recording;
+    # leaving the block waits for it, so the file is complete (or its error raised) before
     # results.json can mark the run complete, and no write outlives a failed estimation.
     with ThreadPoolExecutor(max_workers=1) as background:
+        if cfg.output.recording:
+            background.submit(viz.preload_rerun)
+        t0 = time.perf_counter()
+        progress.stage("simulate")  # each stage's size, where known, comes from the computation
+        sim = protocol.simulate(cfg)
+        timing["simulate_s"] = time.perf_counter() - t0
+        trials = sim.trials
         saving = (
             background.submit(
                 write_trials,
