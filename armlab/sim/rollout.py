@@ -102,6 +102,14 @@ class _ChunkBuffers:
         return self._sets[key]
 
 
+def _as_slice(cols: np.ndarray) -> slice | np.ndarray:
+    """``cols`` as a slice when they are consecutive ascending indices (same elements, in order)."""
+    cols = np.asarray(cols)
+    if cols.size and np.array_equal(cols, np.arange(cols[0], cols[0] + cols.size)):
+        return slice(int(cols[0]), int(cols[0]) + cols.size)
+    return cols
+
+
 def _lagged(hist: np.ndarray, c0: int, c1: int, lag: int, before) -> np.ndarray:
     """``hist[:, c0 - lag : c1 - lag]`` (n_trials, c1 - c0, k), ``before`` where the index is < 0
     (the steady state before the first step)."""
@@ -180,6 +188,8 @@ def simulate(
     nsd = model.nsensordata
     nstate = mujoco.mj_stateSize(model, spec)
     act_cols = 1 + model.nq + model.nv + model.actuator_actadr[scene.muscle_act]  # activations' places
+    # consecutive columns as slices: the chunks' copies read them without a fancy-index gather
+    act_cols, len_cols, vel_cols = (_as_slice(c) for c in (act_cols, len_sl, vel_sl))
     n_samples = n_steps // substeps
     sensordata = np.empty((n_trials, n_samples, nsd))
     activation = np.empty((n_trials, n_samples, len(MUSCLES)))
@@ -214,7 +224,7 @@ def simulate(
         s1 = min(n_samples, s0 + len(range(o, c1 - c0, substeps)))
         kept = slice(o, o + (s1 - s0) * substeps, substeps)
         sensordata[:, s0:s1] = sd[:, kept]
-        activation[:, s0:s1] = states[:, kept][..., act_cols]
+        activation[:, s0:s1] = states[:, kept, act_cols]
         muscle_ctrl[:, s0:s1] = u[:, kept]
         qpos[:, s0:s1] = states[:, kept, 1 : 1 + model.nq]
         progress.advance(n_trials * c1 / n_steps - n_trials * c0 / n_steps)
@@ -255,8 +265,8 @@ def simulate(
             finally:
                 stepping.result()  # never leave a rollout writing into buffers while raising
             warned = warning_counts(data)  # the next rollout call clears the counters
-            hist_len[:, c0:c1] = sd[:, :, len_sl]
-            hist_vel[:, c0:c1] = sd[:, :, vel_sl]
+            hist_len[:, c0:c1] = sd[:, :, len_cols]
+            hist_vel[:, c0:c1] = sd[:, :, vel_cols]
             pending = (c0, c1, state, states, sd, u, warned)
             state = np.ascontiguousarray(states[:, -1])  # a copy: the buffer is reused
         keep(*pending)
