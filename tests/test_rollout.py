@@ -148,3 +148,10 @@ def test_pipelined_chunks_equal_a_plain_serial_loop(lab, nthread):
     res = simulate(lab.scene, lab.hold.state, targets, base, reflex, substeps=SUBSTEPS, nthread=nthread)
     assert_array_equal(res.sensordata, _serial_reference(lab, targets, base, reflex))
     assert not np.array_equal(res.qpos[0], res.qpos[1])  # the two trials differ
+
+
+def test_a_batch_of_no_steps_records_no_samples(lab):
+    res = simulate(
+        lab.scene, lab.hold.state, np.zeros((2, 0, 7)), lab.hold.activation, ReflexConfig(), substeps=2
+    )
+    assert res.sensordata.shape == (2, 0, lab.scene.model.nsensordata) and res.qpos.shape[:2] == (2, 0)

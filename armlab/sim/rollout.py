@@ -10,7 +10,7 @@ This is exact (no approximation of the delay) and keeps Python out of the per-st
 from __future__ import annotations
 
 import os
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import ThreadPoolExecutor, wait
 from dataclasses import dataclass
 
 import mujoco
@@ -232,7 +232,8 @@ def simulate(
     # the trials advance together: after a chunk ending at step c1, n_trials * c1 / n_steps trials' worth
     progress.stage("simulate", n_trials, "trials")
     pending = None  # the chunk stepped last, its outputs not yet kept
-    robot_ctrl(0)
+    if len(starts):
+        robot_ctrl(0)
     # One worker thread runs each chunk's rollout (MuJoCo releases the GIL while it steps); this
     # thread meanwhile keeps the previous chunk's samples and prepares the next chunk's robot
     # controls. The chunks, their inputs and the order of every operation on a trial are those of a
@@ -263,13 +264,15 @@ def simulate(
                 if j + 1 < len(starts):
                     robot_ctrl(j + 1)  # the other buffer set: the chunk it held is kept
             finally:
-                stepping.result()  # never leave a rollout writing into buffers while raising
+                wait([stepping])  # never leave a rollout writing into the buffers while raising
+            stepping.result()
             warned = warning_counts(data)  # the next rollout call clears the counters
             hist_len[:, c0:c1] = sd[:, :, len_cols]
             hist_vel[:, c0:c1] = sd[:, :, vel_cols]
             pending = (c0, c1, state, states, sd, u, warned)
             state = np.ascontiguousarray(states[:, -1])  # a copy: the buffer is reused
-        keep(*pending)
+        if pending is not None:
+            keep(*pending)
     return SimResult(
         sensordata=sensordata,
         activation=activation,
