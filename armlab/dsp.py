@@ -21,6 +21,8 @@ imports only NumPy, SciPy and :mod:`armlab.errors`.
 from __future__ import annotations
 
 import math
+import os
+from concurrent.futures import ThreadPoolExecutor
 from functools import lru_cache
 from typing import Literal
 
@@ -371,4 +373,25 @@ def lowpass_noise(
     impulse[0] = 1.0
     gain = math.sqrt(float(np.sum(signal.sosfilt(sos, impulse) ** 2)))  # output std per unit input
     white = rng.standard_normal((shape[0], n_burn + shape[1], *shape[2:]))
-    return signal.sosfilt(sos, white, axis=1)[:, n_burn:] / gain
+    return _sosfilt_rows(sos, white)[:, n_burn:] / gain
+
+
+# elements: below ~1e6 (a few ms of filtering) a second thread's start-up outweighs what it saves
+_SPLIT_MIN_SIZE = 1 << 20
+
+
+def _sosfilt_rows(sos: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """``signal.sosfilt(sos, x, axis=1)``, the rows (axis 0) filtered in two blocks on two threads
+    (SciPy releases the GIL while it filters). Every row is filtered alone by the same sections in
+    the same order, so the result is bit-identical to the single call."""
+    if x.shape[0] < 2 or x.size < _SPLIT_MIN_SIZE or (os.cpu_count() or 1) < 2:
+        return signal.sosfilt(sos, x, axis=1)
+    out = np.empty(x.shape)
+    half = x.shape[0] // 2
+
+    def block(rows: slice) -> None:
+        out[rows] = signal.sosfilt(sos, x[rows], axis=1)
+
+    with ThreadPoolExecutor(2) as pool:
+        list(pool.map(block, (slice(0, half), slice(half, None))))
+    return out

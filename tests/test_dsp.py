@@ -216,3 +216,14 @@ def test_a_remembered_spectrum_is_never_handed_out_for_a_changed_signal():
     fresh = np.fft.rfft(np.concatenate([np.full(7, z[0]), z, np.full(7, z[-1])]))
     np.testing.assert_array_equal(again, fresh)
     assert not np.array_equal(again, first)
+
+
+def test_row_blocks_filtered_on_threads_equal_one_call():
+    # lowpass_noise filters rows (axis 0) in two blocks on two threads above ~1e6 elements: every
+    # row filtered alone by the same sections, so bit-identical to one sosfilt call
+    from armlab.dsp import _SPLIT_MIN_SIZE, _sosfilt_rows, butterworth
+
+    sos = butterworth(2.0, 1000.0, 2)
+    x = np.random.default_rng(0).standard_normal((5, _SPLIT_MIN_SIZE // 5 + 7, 2))
+    assert x.size >= _SPLIT_MIN_SIZE
+    np.testing.assert_array_equal(_sosfilt_rows(sos, x), signal.sosfilt(sos, x, axis=1))

@@ -108,3 +108,22 @@ def test_measure_and_suite_validation():
         SensorSuite(ft_force=JR3_FORCE, ft_torque=JR3_TORQUE, encoder="lwr", joint_torque=LWR_JOINT_TORQUE)
     with pytest.raises(ConfigError, match="valid channels"):
         SensorSuite.ideal().spec_for("emg")
+
+
+def test_channels_measured_concurrently_equal_one_after_the_other():
+    # measure() applies the channels on threads; each must be what its own child generator gives
+    # serially (the seeds drawn from rng in the suite's channel order), in the same key order
+    from armlab.sensors.channel import apply_channel
+
+    clean, suite, wait = _clean(n_trials=4), SensorSuite.realistic(), np.array([0.5, 1.0, 1.5, 2.0])
+    out = measure(clean, suite, FS, np.random.default_rng(7), t0_s=wait)
+    order = suite.channel_fields()
+    seeds = np.random.default_rng(7).integers(0, 2**63, size=len(order), dtype=np.int64)
+    serial = {
+        name: apply_channel(clean[name], FS, suite.spec_for(name), np.random.default_rng(int(s)), t0_s=wait)
+        for s, name in zip(seeds, order, strict=True)
+        if name in clean
+    }
+    assert list(out) == list(serial)
+    for name in serial:
+        assert np.array_equal(out[name], serial[name])

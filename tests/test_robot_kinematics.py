@@ -63,3 +63,16 @@ def test_solve_ik_rejects_unreachable_target():
     far = hand_world(scene, np.array([0.08, 1.0])) + np.array([3.0, 0.0, 0.0])  # m, beyond the ~1.2 m reach
     with pytest.raises(ModelError, match="cannot reach"):
         solve_ik(scene, far[None], nominal_robot_posture(scene, far))
+
+
+def test_kinematics_by_trial_halves_on_threads_equal_one_call():
+    # the lab computes the chain for the two halves of the trials on two threads: bit-identical
+    from armlab.sim.lab import _forward_by_halves
+
+    lab = make_lab("hill", False)
+    fk = RobotKinematics.from_scene(lab.scene)
+    q = lab.hold.robot_target + 0.1 * np.random.default_rng(0).standard_normal((5, 40, 7))
+    contact, rot = _forward_by_halves(fk, q)
+    ref_contact, ref_rot = fk.forward(q)
+    np.testing.assert_array_equal(contact, ref_contact)
+    np.testing.assert_array_equal(rot, ref_rot)

@@ -249,13 +249,10 @@ def _window(
     """
     w = _check_window(signals, idx, window_samples)
     n = signals.n_samples
-    flat = (idx * n + signals.onset_index[idx])[:, None] + np.arange(w if length is None else length)
-    last = (idx * n + n - 1)[:, None]
-    flat = np.minimum(flat, last)
-    return tuple(
-        np.take(a.reshape(-1, 2), flat, axis=0)
-        for a in (signals.q, signals.qd, signals.qdd, signals.dq, signals.dtau)
-    )
+    t = np.minimum(signals.onset_index[idx][:, None] + np.arange(w if length is None else length), n - 1)
+    # a gather of the selected samples only: the filtered signals are strided views, which a
+    # reshape would first copy whole (~10 MB each for a 780-trial run) on every call
+    return tuple(a[idx[:, None], t] for a in (signals.q, signals.qd, signals.qdd, signals.dq, signals.dtau))
 
 
 def _augmented(q, qd, qdd, dq, dtau, xi_known) -> np.ndarray:

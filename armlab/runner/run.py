@@ -43,19 +43,17 @@ __all__ = [
 ]
 
 
-def _save_trials(path: Path, trials: TrialSet, extra_attrs: dict) -> None:
-    """Write the trial file; drawing aids (body points) stay out of it."""
+def _saved_trials(trials: TrialSet, extra_attrs: dict) -> TrialSet:
+    """What the trial file holds: drawing aids (body points) stay out of it. Its own dicts, taken
+    before the file is written in the background, so the estimation cannot change what is saved."""
     saved = {k: v for k, v in trials.channels.items() if not k.endswith("_points")}
-    write_trials(
-        path,
-        TrialSet(
-            fs_hz=trials.fs_hz,
-            onset_index=trials.onset_index,
-            channels=saved,
-            units={k: trials.units[k] for k in saved},
-            trial_meta=trials.trial_meta,
-            attrs={**trials.attrs, **extra_attrs},
-        ),
+    return TrialSet(
+        fs_hz=trials.fs_hz,
+        onset_index=trials.onset_index,
+        channels=saved,
+        units={k: trials.units[k] for k in saved},
+        trial_meta=dict(trials.trial_meta),
+        attrs={**trials.attrs, **extra_attrs},
     )
 
 
@@ -64,29 +62,35 @@ def _run(cfg: ExperimentConfig, out_dir: Path, config_yaml: str, timing: dict) -
 
     protocol = registry.get(cfg.protocol_name, need="run")
     check_effects(protocol, cfg)
-    t0 = time.perf_counter()
-    progress.stage("simulate")  # each stage's size, where known, comes from the computation
-    sim = protocol.simulate(cfg)
-    timing["simulate_s"] = time.perf_counter() - t0
-    t1 = time.perf_counter()
-    progress.stage("estimate")
-    results, series = sim.estimate()
-    timing["estimate_s"] = time.perf_counter() - t1
-    trials = sim.trials
-    results["simulated_s"] = trials.n_trials * trials.n_samples / trials.fs_hz
-    t2 = time.perf_counter()
-    progress.stage("outputs")
-    # The trial file is compressed in a second thread (HDF5's deflate runs without the GIL) while
-    # the protocol draws its figures and recording; leaving the block waits for it, so it is
-    # complete (or its error raised) before results.json can mark the run complete.
+    # One background thread: rerun is imported while the protocol simulates (when the run records),
+    # then the trial file is compressed (HDF5's deflate runs without the GIL) from the end of the
+    # simulation on, while the protocol estimates and then draws its figures and recording;
+    # leaving the block waits for it, so the file is complete (or its error raised) before
+    # results.json can mark the run complete, and no write outlives a failed estimation.
     with ThreadPoolExecutor(max_workers=1) as background:
+        if cfg.output.recording:
+            background.submit(viz.preload_rerun)
+        t0 = time.perf_counter()
+        progress.stage("simulate")  # each stage's size, where known, comes from the computation
+        sim = protocol.simulate(cfg)
+        timing["simulate_s"] = time.perf_counter() - t0
+        trials = sim.trials
         saving = (
             background.submit(
-                _save_trials, out_dir / "trials.h5", trials, {"config_yaml": config_yaml, **sim.attrs}
+                write_trials,
+                out_dir / "trials.h5",
+                _saved_trials(trials, {"config_yaml": config_yaml, **sim.attrs}),
             )
             if cfg.output.trials
             else None
         )
+        t1 = time.perf_counter()
+        progress.stage("estimate")
+        results, series = sim.estimate()
+        timing["estimate_s"] = time.perf_counter() - t1
+        results["simulated_s"] = trials.n_trials * trials.n_samples / trials.fs_hz
+        t2 = time.perf_counter()
+        progress.stage("outputs")
         write_new(out_dir / "scene.xml", sim.scene_xml)
         ctx = OutputContext(viz=viz, out_dir=out_dir, trials=trials, results=results, series=series, cfg=cfg)
         written = protocol.outputs(ctx) if protocol.outputs is not None else {}

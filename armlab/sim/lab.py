@@ -8,6 +8,8 @@ encoders by forward kinematics, the F/T reading rotated into the shoulder frame)
 
 from __future__ import annotations
 
+import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -19,7 +21,7 @@ from armlab.config.subject import SubjectConfig
 from armlab.errors import ConfigError
 from armlab.models.ground_truth import GroundTruth, ground_truth
 from armlab.models.robot_fk import RobotKinematics
-from armlab.models.scene import ROBOT_POINTS, Scene, build_scene
+from armlab.models.scene import MUSCLES, ROBOT_POINTS, Scene, build_scene
 from armlab.perturbations.quintic import quintic_profile
 from armlab.perturbations.scenario import Scenario, TrialPlan
 from armlab.sensors.channel import ChannelSpec, apply_channel
@@ -28,7 +30,7 @@ from armlab.sim.hold import HoldState, hand_world, settle
 from armlab.sim.robot_ik import solve_ik
 from armlab.sim.rollout import simulate
 from armlab.sim.stability import TrialLabels, check_bound
-from armlab.sim.subject import activation_commands
+from armlab.sim.subject import commands, fluctuation
 
 __all__ = [
     "CUFF_FORCE_BOUND_N",
@@ -79,6 +81,23 @@ def _force_effects(z: np.ndarray, effects: EffectsConfig, fs: float) -> np.ndarr
     return apply_channel(z, fs, spec, np.random.default_rng(0))
 
 
+def _forward_by_halves(fk: RobotKinematics, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``fk.forward(q)`` of (n_trials, n_samples, 7) encoder angles, the two halves of the trials
+    on two threads (NumPy releases the GIL in its array loops). Every sample's chain is computed
+    alone by the same operations, so the result is bit-identical to one call."""
+    n = q.shape[0]
+    if n < 2 or (os.cpu_count() or 1) < 2:
+        return fk.forward(q)
+    contact, rot = np.empty(q.shape[:-1] + (3,)), np.empty(q.shape[:-1] + (3, 3))
+
+    def part(rows: slice) -> None:
+        contact[rows], rot[rows] = fk.forward(q[rows])
+
+    with ThreadPoolExecutor(2) as pool:
+        list(pool.map(part, (slice(0, n // 2), slice(n // 2, None))))
+    return contact, rot
+
+
 @dataclass(frozen=True, kw_only=True, eq=False)
 class LabRecording:
     """What a simulated session produced, as arrays.
@@ -111,7 +130,8 @@ def robot_targets(
 
     The hand path of each direction, x(s) = f(q0 + s dq_f) for s in [0, 1], is solved by IK once
     on :data:`PATH_POINTS` points and spline-interpolated in s; every trial then evaluates it at
-    s(t) = quintic((t - t_onset) / T_k) (eq. 16), so durations share the path.
+    s(t) = quintic((t - t_onset) / T_k) (eq. 16), so durations share the path. Trials of the same
+    direction and T_k have the same targets: each such pair is evaluated once and copied.
 
     Args:
         t_rel: (n_steps,) s, time of each physics step relative to the onset.
@@ -124,11 +144,16 @@ def robot_targets(
     for dq_f in directions:
         path = hand_world(scene, q0 + s_grid[:, None] * dq_f)
         splines.append(CubicSpline(s_grid, solve_ik(scene, path, hold.robot_target), axis=0))
-    out = np.empty((plan.n_trials, t_rel.size, 7))
-    for i in range(plan.n_trials):
-        s, _, _ = quintic_profile(t_rel, float(plan.t_k_s[i]))
-        out[i] = splines[plan.direction[i]](s)
-    return out
+    pairs, which = np.unique(
+        np.stack([np.asarray(plan.direction, float), np.asarray(plan.t_k_s, float)], axis=1),
+        axis=0,
+        return_inverse=True,
+    )
+    table = np.empty((len(pairs), t_rel.size, 7))
+    for j, (direction, t_k) in enumerate(pairs):
+        s, _, _ = quintic_profile(t_rel, float(t_k))
+        table[j] = splines[int(direction)](s)
+    return table[np.asarray(which).reshape(-1)]
 
 
 def record_trials(
@@ -155,32 +180,41 @@ def record_trials(
             f"effects {other} are not simulated by the {cfg.protocol_name} laboratory; it applies "
             f"{list(LAB_EFFECTS)} (reflex and cuff compliance are its reflex.* and cuff.* settings)"
         )
-    scene = build_scene(cfg.arm, cfg.cuff, cfg.robot, cfg.sim)
-    _apply_model_effects(scene, cfg.effects)
-    hold = settle(scene, cfg.arm, cfg.sim.settle_s, protocol=cfg.protocol_name)
-    truth = ground_truth(scene, hold.state, cfg.cuff.rigid)
-
     fs = cfg.sensors.fs_hz
-    dt = scene.model.opt.timestep
-    substeps = int(round(1.0 / (fs * dt)))
-    if substeps < 1 or abs(substeps * fs * dt - 1.0) > 1e-9:
-        raise ConfigError(
-            f"sensors.fs_hz={fs} must divide the physics rate 1/sim.timestep_s={1 / dt:g} Hz into whole steps"
-        )
     n_samples = int(round(scenario.record_s * fs))
-    onset = int(round(scenario.pre_onset_record_s * fs))
-    n_steps = n_samples * substeps
-    # sample j is the state after physics step (j + 1) * substeps - 1, i.e. at (j + 1) / fs on the
-    # step clock; the perturbation starts at sample `onset`, so at (onset + 1) / fs
-    t_rel = (np.arange(n_steps) + 1) * dt - (onset + 1) / fs
-    targets = robot_targets(scene, hold, np.asarray(cfg.arm.q0, float), plan, scenario.directions_rad, t_rel)
-    muscle_base = hold.activation
-    if subject is not None and subject.active:
-        if subject_rng is None:
-            raise ConfigError("an active subject fluctuation needs its own generator (subject_rng)")
-        muscle_base = activation_commands(
-            hold.activation, subject, plan.n_trials, n_steps, substeps, fs, subject_rng
+    active = subject is not None and subject.active
+    # The subject's fluctuation needs no scene: it is drawn on a second thread while the scene is
+    # built and settled and the robot paths are solved (its own generator: the same numbers).
+    with ThreadPoolExecutor(max_workers=1) as early:
+        drawing = (
+            early.submit(fluctuation, subject, plan.n_trials, n_samples, len(MUSCLES), fs, subject_rng)
+            if active and subject_rng is not None
+            else None
         )
+        scene = build_scene(cfg.arm, cfg.cuff, cfg.robot, cfg.sim)
+        _apply_model_effects(scene, cfg.effects)
+        hold = settle(scene, cfg.arm, cfg.sim.settle_s, protocol=cfg.protocol_name)
+        truth = ground_truth(scene, hold.state, cfg.cuff.rigid)
+
+        dt = scene.model.opt.timestep
+        substeps = int(round(1.0 / (fs * dt)))
+        if substeps < 1 or abs(substeps * fs * dt - 1.0) > 1e-9:
+            raise ConfigError(
+                f"sensors.fs_hz={fs} must divide the physics rate 1/sim.timestep_s={1 / dt:g} Hz "
+                "into whole steps"
+            )
+        onset = int(round(scenario.pre_onset_record_s * fs))
+        n_steps = n_samples * substeps
+        # sample j is the state after physics step (j + 1) * substeps - 1, i.e. at (j + 1) / fs on the
+        # step clock; the perturbation starts at sample `onset`, so at (onset + 1) / fs
+        t_rel = (np.arange(n_steps) + 1) * dt - (onset + 1) / fs
+        q0 = np.asarray(cfg.arm.q0, float)
+        targets = robot_targets(scene, hold, q0, plan, scenario.directions_rad, t_rel)
+        muscle_base = hold.activation
+        if active:
+            if subject_rng is None:
+                raise ConfigError("an active subject fluctuation needs its own generator (subject_rng)")
+            muscle_base = commands(hold.activation, drawing.result(), n_steps, substeps)
     who = TrialLabels(
         protocol=cfg.protocol_name,
         labels=tuple(
@@ -202,38 +236,41 @@ def record_trials(
         "N",
         "no arm perturbation applies it; valid runs stay below 50 N",
     )
-    clean = {
-        "robot_q": np.concatenate([scene.sensor(sd, f"lwr_q{i}") for i in range(1, 8)], axis=-1),
-        "robot_tau": np.concatenate([scene.sensor(sd, f"lwr_tau{i}") for i in range(1, 8)], axis=-1),
-        "ft_force": _force_effects(scene.sensor(sd, "ft_force"), cfg.effects, fs),
-        "ft_torque": _force_effects(scene.sensor(sd, "ft_torque"), cfg.effects, fs),
-    }
-    suite = SensorSuite.realistic() if cfg.sensors.preset == "realistic" else SensorSuite.ideal()
-    # drift accumulates from taring, before the random wait
-    measured = measure(clean, suite, fs, rng, t0_s=plan.wait_s)
-    if cfg.effects.force_sensor_noise is not None:  # extra white noise, N, after the sensor suite
-        measured["ft_force"] = measured["ft_force"] + rng.normal(
-            0.0, cfg.effects.force_sensor_noise.std, measured["ft_force"].shape
-        )
-    fk = RobotKinematics.from_scene(scene)
-    contact, ft_rot = fk.forward(measured["robot_q"])
-    hand_pos = (contact - scene.shoulder_pos)[..., :2]
-    hand_force = np.einsum("...ij,...j->...i", ft_rot, measured["ft_force"])[..., :2]
 
-    channels = {
-        "hand_pos": hand_pos,
-        "hand_force": hand_force,
-        **measured,
-        "true_arm_q": sim.qpos[..., scene.arm_qpos],
-        "true_hand_pos": (scene.sensor(sd, "p_hand") - scene.shoulder_pos)[..., :2],
-        "true_activation": sim.activation,
-        "true_arm_points": np.concatenate(
-            [scene.sensor(sd, f"p_{s}") for s in ("shoulder_site", "elbow_site", "hand")], axis=-1
-        ),
-        "true_robot_points": np.concatenate(
-            [scene.sensor(sd, f"p_{b}") for b in ROBOT_POINTS] + [scene.sensor(sd, "p_flange")], axis=-1
-        ),
-    }
+    def true_channels() -> dict[str, np.ndarray]:  # noiseless channels: copies out of the sensor data
+        return {
+            "true_arm_q": sim.qpos[..., scene.arm_qpos],
+            "true_hand_pos": (scene.sensor(sd, "p_hand") - scene.shoulder_pos)[..., :2],
+            "true_activation": sim.activation,
+            "true_arm_points": np.concatenate(
+                [scene.sensor(sd, f"p_{s}") for s in ("shoulder_site", "elbow_site", "hand")], axis=-1
+            ),
+            "true_robot_points": np.concatenate(
+                [scene.sensor(sd, f"p_{b}") for b in ROBOT_POINTS] + [scene.sensor(sd, "p_flange")],
+                axis=-1,
+            ),
+        }
+
+    # the noiseless channels are copied out on a second thread while the sensors are modelled
+    with ThreadPoolExecutor(max_workers=1) as beside:
+        true = beside.submit(true_channels)
+        clean = {
+            "robot_q": np.concatenate([scene.sensor(sd, f"lwr_q{i}") for i in range(1, 8)], axis=-1),
+            "robot_tau": np.concatenate([scene.sensor(sd, f"lwr_tau{i}") for i in range(1, 8)], axis=-1),
+            "ft_force": _force_effects(scene.sensor(sd, "ft_force"), cfg.effects, fs),
+            "ft_torque": _force_effects(scene.sensor(sd, "ft_torque"), cfg.effects, fs),
+        }
+        suite = SensorSuite.realistic() if cfg.sensors.preset == "realistic" else SensorSuite.ideal()
+        # drift accumulates from taring, before the random wait
+        measured = measure(clean, suite, fs, rng, t0_s=plan.wait_s)
+        if cfg.effects.force_sensor_noise is not None:  # extra white noise, N, after the sensor suite
+            measured["ft_force"] = measured["ft_force"] + rng.normal(
+                0.0, cfg.effects.force_sensor_noise.std, measured["ft_force"].shape
+            )
+        contact, ft_rot = _forward_by_halves(RobotKinematics.from_scene(scene), measured["robot_q"])
+        hand_pos = (contact - scene.shoulder_pos)[..., :2]
+        hand_force = np.einsum("...ij,...j->...i", ft_rot, measured["ft_force"])[..., :2]
+        channels = {"hand_pos": hand_pos, "hand_force": hand_force, **measured, **true.result()}
     units = {
         "hand_pos": "m",
         "hand_force": "N",

@@ -10,6 +10,7 @@ This is exact (no approximation of the delay) and keeps Python out of the per-st
 from __future__ import annotations
 
 import os
+from concurrent.futures import ThreadPoolExecutor, wait
 from dataclasses import dataclass
 
 import mujoco
@@ -20,7 +21,7 @@ from armlab import progress
 from armlab.config.schema import ReflexConfig
 from armlab.errors import SimulationError
 from armlab.models.scene import MUSCLES, Scene
-from armlab.sim.stability import TrialLabels, check_rollout
+from armlab.sim.stability import TrialLabels, check_rollout, warning_counts
 
 __all__ = [
     "REFLEX_LENGTH_SCALE_M",
@@ -80,20 +81,33 @@ def reflex_command(
 
 
 class _ChunkBuffers:
-    """Contiguous control, state and sensor arrays of one rollout chunk, reused across chunks."""
+    """Two sets of contiguous control, state and sensor arrays of a rollout chunk, reused across
+    chunks (one is stepped into while the other's outputs are read)."""
 
     def __init__(self, n_trials: int, chunk: int, nu: int, nstate: int, nsd: int) -> None:
         self._shape = (n_trials, nu, nstate, nsd)
-        self._full = self._alloc(chunk)
+        self._sets: dict[tuple[int, int], tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
 
     def _alloc(self, m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         n, nu, nstate, nsd = self._shape
         return np.zeros((n, m, nu)), np.empty((n, m, nstate)), np.empty((n, m, nsd))
 
-    def get(self, m: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """(ctrl (n, m, nu), state (n, m, nstate), sensordata (n, m, nsd)); a shorter last chunk
-        gets its own arrays (the rollout needs contiguous ones of exactly m steps)."""
-        return self._full if m == self._full[0].shape[1] else self._alloc(m)
+    def get(self, m: int, which: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Set ``which`` (0 or 1) of (ctrl (n, m, nu), state (n, m, nstate), sensordata (n, m,
+        nsd)); a shorter last chunk gets its own arrays (the rollout needs contiguous ones of
+        exactly m steps)."""
+        key = (m, which)
+        if key not in self._sets:
+            self._sets[key] = self._alloc(m)
+        return self._sets[key]
+
+
+def _as_slice(cols: np.ndarray) -> slice | np.ndarray:
+    """``cols`` as a slice when they are consecutive ascending indices (same elements, in order)."""
+    cols = np.asarray(cols)
+    if cols.size and np.array_equal(cols, np.arange(cols[0], cols[0] + cols.size)):
+        return slice(int(cols[0]), int(cols[0]) + cols.size)
+    return cols
 
 
 def _lagged(hist: np.ndarray, c0: int, c1: int, lag: int, before) -> np.ndarray:
@@ -174,6 +188,8 @@ def simulate(
     nsd = model.nsensordata
     nstate = mujoco.mj_stateSize(model, spec)
     act_cols = 1 + model.nq + model.nv + model.actuator_actadr[scene.muscle_act]  # activations' places
+    # consecutive columns as slices: the chunks' copies read them without a fancy-index gather
+    act_cols, len_cols, vel_cols = (_as_slice(c) for c in (act_cols, len_sl, vel_sl))
     n_samples = n_steps // substeps
     sensordata = np.empty((n_trials, n_samples, nsd))
     activation = np.empty((n_trials, n_samples, len(MUSCLES)))
@@ -183,23 +199,52 @@ def simulate(
     hist_len = np.empty((n_trials, n_steps, len(MUSCLES)))
     hist_vel = np.empty_like(hist_len)
 
-    # Buffers reused by every full chunk: the rollout writes into them (no allocation, no page
-    # faults per chunk), and its inputs are checked once here, so each call skips the checks.
+    # Two sets of buffers, reused chunk after chunk: the rollout writes into one while the other
+    # chunk's outputs are checked and kept (no allocation, no page faults per chunk); the inputs
+    # are checked once here, so each call skips the checks.
     bufs = _ChunkBuffers(n_trials, chunk, model.nu, nstate, nsd)
     state = np.ascontiguousarray(np.tile(initial_state, (n_trials, 1)), dtype=float)
     if state.shape[1] != nstate:
         raise SimulationError(f"initial_state must hold {nstate} full-physics values, got {state.shape[1]}")
     models = [model] * n_trials  # the unchecked call takes one model per trial
+    starts = range(0, n_steps, chunk)
+
+    def robot_ctrl(j: int) -> None:  # the robot's part of chunk j's controls (known in advance)
+        c0 = starts[j]
+        c1 = min(n_steps, c0 + chunk)
+        bufs.get(c1 - c0, j % 2)[0][:, :, scene.robot_act] = robot_targets[:, c0:c1]
+
+    def keep(c0: int, c1: int, state_in, states, sd, u, warned) -> None:
+        """Check chunk [c0, c1) and keep its samples (while the next chunk steps)."""
+        check_rollout(who, state_in, states, data, dt, np.arange(c0 + 1, c1 + 1) * dt, warned=warned)
+        # keep the samples whose last physics step falls in this chunk: steps c0 + o,
+        # c0 + o + substeps, ... (step s ends sample (s + 1) / substeps - 1)
+        o = (substeps - 1 - c0) % substeps
+        s0 = (c0 + o + 1) // substeps - 1
+        s1 = min(n_samples, s0 + len(range(o, c1 - c0, substeps)))
+        kept = slice(o, o + (s1 - s0) * substeps, substeps)
+        sensordata[:, s0:s1] = sd[:, kept]
+        activation[:, s0:s1] = states[:, kept, act_cols]
+        muscle_ctrl[:, s0:s1] = u[:, kept]
+        qpos[:, s0:s1] = states[:, kept, 1 : 1 + model.nq]
+        progress.advance(n_trials * c1 / n_steps - n_trials * c0 / n_steps)
+
     # the trials advance together: after a chunk ending at step c1, n_trials * c1 / n_steps trials' worth
     progress.stage("simulate", n_trials, "trials")
-    with mj_rollout.Rollout(nthread=len(data)) as runner:
-        for c0 in range(0, n_steps, chunk):
+    pending = None  # the chunk stepped last, its outputs not yet kept
+    if len(starts):
+        robot_ctrl(0)
+    # One worker thread runs each chunk's rollout (MuJoCo releases the GIL while it steps); this
+    # thread meanwhile keeps the previous chunk's samples and prepares the next chunk's robot
+    # controls. The chunks, their inputs and the order of every operation on a trial are those of a
+    # serial loop, so the trajectories are bit-identical to it.
+    with mj_rollout.Rollout(nthread=len(data)) as runner, ThreadPoolExecutor(1) as stepper:
+        for j, c0 in enumerate(starts):
             c1 = min(n_steps, c0 + chunk)
             m = c1 - c0
-            ctrl, states, sd = bufs.get(m)
-            ctrl[:, :, scene.robot_act] = robot_targets[:, c0:c1]
+            ctrl, states, sd = bufs.get(m, j % 2)
             base = muscle_base[:, c0:c1] if per_step else muscle_base
-            if reflex.enabled:
+            if reflex.enabled:  # stretch lagged by >= one chunk: only chunks already stepped
                 u = reflex_command(
                     base,
                     np.stack([_lagged(hist_len, c0, c1, lag, ref_len) for lag in (lag_s, lag_sp)]),
@@ -210,22 +255,24 @@ def simulate(
             else:
                 u = np.broadcast_to(base, (n_trials, m, len(MUSCLES)))
             ctrl[:, :, scene.muscle_act] = u
-            runner.rollout(models, data, state, ctrl, nstep=m, state=states, sensordata=sd, skip_checks=True)
-            check_rollout(who, state, states, data, dt, np.arange(c0 + 1, c1 + 1) * dt)
+            step_args = dict(nstep=m, state=states, sensordata=sd, skip_checks=True)
+            stepping = stepper.submit(runner.rollout, models, data, state, ctrl, **step_args)
+            try:
+                if pending is not None:
+                    keep(*pending)
+                    pending = None
+                if j + 1 < len(starts):
+                    robot_ctrl(j + 1)  # the other buffer set: the chunk it held is kept
+            finally:
+                wait([stepping])  # never leave a rollout writing into the buffers while raising
+            stepping.result()
+            warned = warning_counts(data)  # the next rollout call clears the counters
+            hist_len[:, c0:c1] = sd[:, :, len_cols]
+            hist_vel[:, c0:c1] = sd[:, :, vel_cols]
+            pending = (c0, c1, state, states, sd, u, warned)
             state = np.ascontiguousarray(states[:, -1])  # a copy: the buffer is reused
-            hist_len[:, c0:c1] = sd[:, :, len_sl]
-            hist_vel[:, c0:c1] = sd[:, :, vel_sl]
-            # keep the samples whose last physics step falls in this chunk: steps c0 + o,
-            # c0 + o + substeps, ... (step s ends sample (s + 1) / substeps - 1)
-            o = (substeps - 1 - c0) % substeps
-            s0 = (c0 + o + 1) // substeps - 1
-            s1 = min(n_samples, s0 + len(range(o, m, substeps)))
-            kept = slice(o, o + (s1 - s0) * substeps, substeps)
-            sensordata[:, s0:s1] = sd[:, kept]
-            activation[:, s0:s1] = states[:, kept][..., act_cols]
-            muscle_ctrl[:, s0:s1] = u[:, kept]
-            qpos[:, s0:s1] = states[:, kept, 1 : 1 + model.nq]
-            progress.advance(n_trials * c1 / n_steps - n_trials * c0 / n_steps)
+        if pending is not None:
+            keep(*pending)
     return SimResult(
         sensordata=sensordata,
         activation=activation,

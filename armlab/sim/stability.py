@@ -21,7 +21,7 @@ The checks only read the simulated arrays: a valid run is bit-identical with or 
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import mujoco
@@ -99,6 +99,8 @@ def check_rollout(
     datas: Sequence[mujoco.MjData],
     dt: float,
     t_steps: np.ndarray,
+    *,
+    warned: Mapping[str, int] | None = None,
 ) -> None:
     """Check one ``mujoco.rollout`` chunk of a batch.
 
@@ -109,6 +111,9 @@ def check_rollout(
         datas: the rollout's MjData (their warning counters, cleared by every rollout call).
         dt: s, physics step.
         t_steps: (m,) s, time of each step's end from the trial's start.
+        warned: :func:`warning_counts` of ``datas`` read right after this chunk's rollout, for a
+            caller that checks the chunk once the next rollout has cleared the counters (``datas``
+            is then not read); None reads them from ``datas`` now.
 
     Raises:
         SimulationError: a trial's state was reset by MuJoCo (its clock jumps back), became
@@ -116,7 +121,8 @@ def check_rollout(
     """
     expected = state_in[:, :1] + dt * np.arange(1, states.shape[1] + 1)
     bad = ~np.isfinite(states).all(axis=-1) | (np.abs(states[..., 0] - expected) > 0.5 * dt)
-    warned = warning_counts(datas)
+    if warned is None:
+        warned = warning_counts(datas)
     if not bad.any() and not warned:
         return
     if bad.any():

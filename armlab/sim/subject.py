@@ -11,11 +11,53 @@ import numpy as np
 from armlab.config.subject import SubjectConfig
 from armlab.dsp import lowpass_noise
 
-__all__ = ["BURN_IN_PERIODS", "activation_commands"]
+__all__ = ["BURN_IN_PERIODS", "activation_commands", "commands", "fluctuation"]
 
 # periods of the low-pass corner drawn and dropped before the record starts, so that the
 # fluctuation is stationary from the first sample (the filter's start-up transient is gone)
 BURN_IN_PERIODS = 4.0
+
+
+def fluctuation(
+    subject: SubjectConfig,
+    n_trials: int,
+    n_samples: int,
+    n_muscles: int,
+    fs_hz: float,
+    rng: np.random.Generator,
+) -> np.ndarray:
+    """The relative activation ``1 + trial_cv η + fluctuation_cv ε`` of every trial at every sample.
+
+    η: one standard normal per trial; ε: unit-rms low-pass noise (:func:`armlab.dsp.lowpass_noise`).
+    Needs no scene: a caller may draw it while the scene is built and settled.
+
+    Args:
+        subject: the fluctuation (its ``active`` must be true).
+        n_trials, n_samples: trials and samples of the batch.
+        n_muscles: muscles.
+        fs_hz: Hz, sample rate.
+        rng: the subject's generator (advanced by one normal per trial, then the noise array).
+
+    Returns:
+        (n_trials, n_samples, n_muscles), dimensionless.
+    """
+    eta = rng.standard_normal(n_trials)
+    eps = lowpass_noise(
+        rng,
+        (n_trials, n_samples, n_muscles),
+        fs_hz,
+        subject.fluctuation_hz,
+        burn_in_periods=BURN_IN_PERIODS,
+        name="subject.fluctuation_hz",
+    )
+    return 1.0 + subject.trial_cv * eta[:, None, None] + subject.fluctuation_cv * eps
+
+
+def commands(base: np.ndarray, rel: np.ndarray, n_steps: int, substeps: int) -> np.ndarray:
+    """(n_trials, n_steps, n_muscles) commands in [0, 1]: ``base · rel`` clipped, each sample's value
+    held over its ``substeps`` physics steps (the activation dynamics smooth the steps)."""
+    cmd = np.clip(np.asarray(base, float) * rel, 0.0, 1.0)
+    return np.repeat(cmd, substeps, axis=1)[:, :n_steps]
 
 
 def activation_commands(
@@ -27,7 +69,8 @@ def activation_commands(
     fs_hz: float,
     rng: np.random.Generator,
 ) -> np.ndarray:
-    """Muscle commands of every trial at every physics step.
+    """Muscle commands of every trial at every physics step (:func:`fluctuation` then
+    :func:`commands`).
 
     The fluctuation is drawn at the sample rate ``fs_hz`` and held over the ``substeps`` physics
     steps of each sample (the activation dynamics smooth the steps).
@@ -44,17 +87,5 @@ def activation_commands(
         (n_trials, n_steps, n_muscles) commands in [0, 1].
     """
     base = np.asarray(base, float)
-    n_mus = base.shape[0]
-    n_samples = -(-n_steps // substeps)
-    eta = rng.standard_normal(n_trials)
-    eps = lowpass_noise(
-        rng,
-        (n_trials, n_samples, n_mus),
-        fs_hz,
-        subject.fluctuation_hz,
-        burn_in_periods=BURN_IN_PERIODS,
-        name="subject.fluctuation_hz",
-    )
-    rel = 1.0 + subject.trial_cv * eta[:, None, None] + subject.fluctuation_cv * eps
-    cmd = np.clip(base * rel, 0.0, 1.0)
-    return np.repeat(cmd, substeps, axis=1)[:, :n_steps]
+    rel = fluctuation(subject, n_trials, -(-n_steps // substeps), base.shape[0], fs_hz, rng)
+    return commands(base, rel, n_steps, substeps)

@@ -4,6 +4,7 @@
 only inside its functions.
 """
 
+from armlab.viz._paths import preload_rerun
 from armlab.viz.ci_sweep import plot_ci_window_sweep
 from armlab.viz.cond_diagnosis import (
     cond_diagnosis_figures,
@@ -36,6 +37,7 @@ from armlab.viz.vfs import format_vfs_tables, plot_vfs_figures, write_vfs_record
 __all__ = [
     "DEFAULT_SCALAR_CHANNELS",
     "plot_ci_window_sweep",
+    "preload_rerun",
     "plot_error_vs_window",
     "plot_validation",
     "plot_window_sweep",

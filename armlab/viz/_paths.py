@@ -9,7 +9,7 @@ from pathlib import Path
 from armlab.data.atomic import atomic_path
 from armlab.errors import DataError
 
-__all__ = ["fresh_path", "recording", "save_png"]
+__all__ = ["fresh_path", "preload_rerun", "recording", "save_png"]
 
 DPI = 120  # dots per inch of every written figure
 
@@ -49,6 +49,14 @@ def save_png(fig, path: str | Path, dpi: int = DPI) -> Path:
     with atomic_path(p) as tmp, open(tmp, "wb") as fh:
         fig.savefig(fh, format="png", dpi=dpi)
     return p
+
+
+def preload_rerun() -> None:
+    """Import rerun and its blueprint module now (~0.3 s of CPU), e.g. on a background thread
+    while a run simulates, so the first recording does not wait for the import. Optional: every
+    recording writer imports rerun itself."""
+    import rerun  # noqa: F401
+    import rerun.blueprint  # noqa: F401
 
 
 @contextmanager
