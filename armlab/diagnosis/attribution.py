@@ -22,6 +22,8 @@ tolerances set (:meth:`DiagnosisConfig.with_rules`).
 
 from __future__ import annotations
 
+import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -138,14 +140,9 @@ def select_effects(
         entries = []
         tried = [n for n in candidates if n not in names and _INCOMPATIBLE.get(n) not in names]
         progress.stage(f"try effects (step {step + 1})", len(tried), "candidates")
-        for name, sur in candidates.items():
-            if name in names or _INCOMPATIBLE.get(name) in names:
-                continue
-            if sur.kind == "absorbed":
-                entries.append(_entry(name, gap_c, gap_c, 0.0, 0, excess0, None, identifiable=False))
-                progress.advance()
-                continue
-            fm = fit_model(
+
+        def fit(sur, selected=tuple(selected), current=current):
+            return fit_model(
                 trials,
                 y_band,
                 (*selected, sur),
@@ -154,11 +151,23 @@ def select_effects(
                 nominal_beta=nominal.beta,
                 family=family,
             )
-            gap, rss, _ = held_out_gap(fm, trials, y_band)
-            dp = fm.n_params - current.n_params
-            dbic = n_eff * np.log(rss / rss_c) + dp * np.log(n_eff)
-            entries.append(_entry(name, gap_c, gap, float(dbic), dp, excess0, fm))
-            progress.advance()
+
+        fitted = {n for n in tried if candidates[n].kind != "absorbed"}
+        # the candidates' fits are independent: on threads (NumPy's FFTs, SciPy's filters and
+        # BLAS release the GIL), each the same computation as alone, so the same numbers
+        with ThreadPoolExecutor(max_workers=max(1, min(len(fitted), os.cpu_count() or 1))) as pool:
+            fits = {n: pool.submit(fit, candidates[n]) for n in tried if n in fitted}
+            for name in tried:  # in the candidates' order, as the ranking's ties are broken
+                if name not in fitted:
+                    entries.append(_entry(name, gap_c, gap_c, 0.0, 0, excess0, None, identifiable=False))
+                    progress.advance()
+                    continue
+                fm = fits[name].result()
+                gap, rss, _ = held_out_gap(fm, trials, y_band)
+                dp = fm.n_params - current.n_params
+                dbic = n_eff * np.log(rss / rss_c) + dp * np.log(n_eff)
+                entries.append(_entry(name, gap_c, gap, float(dbic), dp, excess0, fm))
+                progress.advance()
         entries.sort(key=lambda e: e["delta_bic"])
         rankings.append(entries)
         best = entries[0] if entries else None

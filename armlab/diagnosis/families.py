@@ -13,6 +13,7 @@ channel's Butterworth low-pass, an exact fractional delay).
 
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -118,6 +119,7 @@ def shift_columns(t: np.ndarray, z: np.ndarray, delay: float) -> np.ndarray:
 # 1640 look-ups on the referee); the conditioning diagnosis's stacked (850, 660) regressors hit 54
 # of 185 and held ~220 MB at no gain in time (measured in review), so they are not cached.
 _SPECTRA: list[tuple[np.ndarray, int, np.ndarray]] = []
+_SPECTRA_LOCK = threading.Lock()
 _SPECTRA_KEPT = 24  # a few pads of each trial's signals in a fit (6 trials in the REKLAB folder)
 _SPECTRUM_MAX_BYTES = 1 << 20  # bytes of signal: a 30 s trial at 1 kHz in float64 is 240 kB
 
@@ -125,17 +127,20 @@ _SPECTRUM_MAX_BYTES = 1 << 20  # bytes of signal: a 30 s trial at 1 kHz in float
 def _padded_spectrum(z: np.ndarray, pad: int) -> np.ndarray:
     """``rfft`` along axis 0 of ``z`` padded by ``pad`` copies of its end values on each side."""
     kept = z.nbytes <= _SPECTRUM_MAX_BYTES
-    for i in range(len(_SPECTRA) - 1, -1, -1) if kept else ():
-        zc, pc, spec = _SPECTRA[i]
-        if pc == pad and zc.shape == z.shape and zc.dtype == z.dtype and np.array_equal(zc, z):
-            _SPECTRA.append(_SPECTRA.pop(i))
-            return spec
+    if kept:
+        with _SPECTRA_LOCK:  # the candidates of a diagnosis step are fitted on threads
+            for i in range(len(_SPECTRA) - 1, -1, -1):
+                zc, pc, spec = _SPECTRA[i]
+                if pc == pad and zc.shape == z.shape and zc.dtype == z.dtype and np.array_equal(zc, z):
+                    _SPECTRA.append(_SPECTRA.pop(i))
+                    return spec
     zz = np.concatenate([np.repeat(z[:1], pad, axis=0), z, np.repeat(z[-1:], pad, axis=0)], axis=0)
     spec = np.fft.rfft(zz, axis=0)
     spec.flags.writeable = False
     if kept:
-        _SPECTRA.append((z.copy(), pad, spec))
-        del _SPECTRA[:-_SPECTRA_KEPT]
+        with _SPECTRA_LOCK:
+            _SPECTRA.append((z.copy(), pad, spec))
+            del _SPECTRA[:-_SPECTRA_KEPT]
     return spec
 
 
