@@ -162,7 +162,14 @@ def test_estimate_rejects_unknown_estimator_field(small_run, capsys):
     assert "unknown estimator field 'nope'" in capsys.readouterr().err
 
 
-@pytest.mark.parametrize("launcher", [[], ["hydra/launcher=joblib"]], ids=["basic", "joblib"])
+# joblib: slow (make test-all). In `make test`, tests/test_resume.py's joblib sweep checks that each
+# joblib job's trials and results are bit-identical to the serial job of the same number, and
+# "basic" here that the serial jobs are separate folders with their own seeds
+@pytest.mark.parametrize(
+    "launcher",
+    [[], pytest.param(["hydra/launcher=joblib"], marks=pytest.mark.slow)],
+    ids=["basic", "joblib"],
+)
 def test_multirun_sweeps_seeds_into_separate_directories(tmp_path, launcher):
     sweep = tmp_path / "sweep"
     args = ["run", "--multirun", "seed=0,1", *_SMALL, *launcher, f"out={sweep}"]
