@@ -17,6 +17,33 @@ from armlab.models.scene import Scene, build_scene
 from armlab.sim.hold import HoldState, settle
 
 
+# Modules whose tests simulate, diagnose or start `armlab` processes for ~15 s of CPU or more
+# (measured with `pytest --durations`), run first. `make test` spreads modules over two xdist
+# workers (`-n 2 --dist loadfile --no-loadscope-reorder`: a module's shared fixtures are computed
+# once, in one worker): started last, one of these would leave a worker running it alone while
+# the other has finished; started first, the many small modules fill in around them. The order
+# changes no result: every test module is independent (the suite passes in either order).
+HEAVY_FIRST = (
+    "test_resume.py",
+    "test_referee.py",
+    "test_cli.py",
+    "test_cond_diagnosis.py",
+    "test_virtual_force_sensor.py",
+    "test_conditioning_fidelity.py",
+    "test_plugin_protocol.py",
+    "test_fractional_subject.py",
+    "test_published_fractional.py",
+    "test_bad_input.py",
+)
+
+
+def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
+    """Stable-sort the collected tests: the HEAVY_FIRST modules in that order, then the rest as
+    collected (the order inside a module is kept)."""
+    rank = {name: i for i, name in enumerate(HEAVY_FIRST)}
+    items.sort(key=lambda item: rank.get(item.path.name, len(HEAVY_FIRST)))
+
+
 @dataclass(frozen=True)
 class Lab:
     arm: ArmConfig
