@@ -16,7 +16,6 @@ from armlab.config.schema import ArmConfig, CuffConfig, RobotConfig, SimConfig
 from armlab.models.scene import Scene, build_scene
 from armlab.sim.hold import HoldState, settle
 
-
 # Modules whose tests simulate, diagnose or start `armlab` processes for ~15 s of CPU or more
 # (measured with `pytest --durations`), run first. `make test` spreads modules over two xdist
 # workers (`-n 2 --dist loadfile --no-loadscope-reorder`: a module's shared fixtures are computed
