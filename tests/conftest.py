@@ -17,22 +17,23 @@ from armlab.models.scene import Scene, build_scene
 from armlab.sim.hold import HoldState, settle
 
 # Modules whose tests simulate, diagnose or start `armlab` processes for ~15 s of CPU or more
-# (measured with `pytest --durations`), run first. `make test` spreads modules over two xdist
-# workers (`-n 2 --dist loadfile --no-loadscope-reorder`: a module's shared fixtures are computed
-# once, in one worker): started last, one of these would leave a worker running it alone while
-# the other has finished; started first, the many small modules fill in around them. The order
-# changes no result: every test module is independent (the suite passes in either order).
-HEAVY_FIRST = (
-    "test_resume.py",
-    "test_referee.py",
-    "test_cli.py",
-    "test_cond_diagnosis.py",
-    "test_virtual_force_sensor.py",
-    "test_conditioning_fidelity.py",
-    "test_plugin_protocol.py",
-    "test_fractional_subject.py",
-    "test_published_fractional.py",
-    "test_bad_input.py",
+# (the module's user + system time, its `armlab` and joblib processes included), run first.
+# `make test` spreads modules over two xdist workers (`-n 2 --dist loadfile
+# --no-loadscope-reorder`: a module's shared fixtures are computed once, in one worker): started
+# last, one of these would leave a worker running it alone while the other has finished; started
+# first, the many small modules fill in around them. The order changes no result: every test
+# module is independent (the suite passes in this order and in the alphabetical one).
+HEAVY_FIRST = (  # CPU seconds measured on the 2-core machine, heaviest first
+    "test_resume.py",  # ~73 s: interrupted and resumed runs and sweeps, in armlab processes
+    "test_referee.py",  # ~45 s: two small blind benchmarks (joblib workers)
+    "test_virtual_force_sensor.py",  # ~27 s
+    "test_cli.py",  # ~26 s
+    "test_conditioning_fidelity.py",  # ~23 s: the default conditioning run
+    "test_fractional_subject.py",  # ~20 s
+    "test_cond_diagnosis.py",  # ~20 s
+    "test_plugin_protocol.py",  # ~19 s
+    "test_published_fractional.py",  # ~17 s
+    "test_bad_input.py",  # ~16 s
 )
 
 
