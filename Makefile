@@ -18,8 +18,16 @@ setup: $(STAMP)
 run: $(STAMP)
 	$(BIN)/armlab run protocol=conditioning_window
 
+# the suite on TEST_WORKERS processes (pytest-xdist; 2 = this project's 2-core CI machine):
+# --dist loadfile keeps each test module in one worker, so its shared (module-scoped) fixtures are
+# computed once; --no-loadscope-reorder keeps the collection order, whose heaviest modules come
+# first (tests/conftest.py HEAVY_FIRST) so that both workers finish together.
+# `make test TEST_WORKERS=0` runs it in this one process.
+TEST_WORKERS ?= 2
+PYTEST := $(BIN)/python -m pytest -q -n $(TEST_WORKERS) --dist loadfile --no-loadscope-reorder
+
 test: $(STAMP)
-	$(BIN)/python -m pytest -q
+	$(PYTEST)
 
 # adds the slow tests, among them 3-job multiruns through the Ray and submitit launchers (the
 # optional extras armlab[ray] and armlab[slurm], installed here)
@@ -28,7 +36,7 @@ $(VENV)/.extras: $(STAMP) pyproject.toml
 	touch $(VENV)/.extras
 
 test-all: $(VENV)/.extras
-	$(BIN)/python -m pytest -q -m "slow or not slow"
+	$(PYTEST) -m "slow or not slow"
 
 # the observation-window sweep CI gates on (.ci/window_sweep.py; docs/ci_window_sweep.md), then
 # the proof that the gate fails on an estimator broken on purpose

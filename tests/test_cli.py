@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import importlib
 import json
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -95,12 +96,21 @@ def _armlab(*args: str, cwd: Path) -> subprocess.CompletedProcess:
     return subprocess.run([str(exe), *args], cwd=cwd, capture_output=True, text=True, timeout=300)
 
 
+def _estimate(capsys, *args: str) -> Path:
+    """``armlab estimate <args>`` in this process (the entry point's own start-up and exit status
+    are checked with `armlab run` above and in tests/test_bad_input.py): the folder it names last."""
+    assert main(["estimate", *args]) == 0, capsys.readouterr().err
+    out = capsys.readouterr().out
+    return Path(out.strip().splitlines()[-1].removeprefix("outputs: "))
+
+
 @pytest.fixture(scope="module")
 def small_run(tmp_path_factory):
+    """A small run without out=: a new timestamped folder under outputs/ of the working folder."""
     tmp = tmp_path_factory.mktemp("cli")
-    run_dir = tmp / "run"
-    proc = _armlab("run", *_SMALL, "seed=5", f"out={run_dir}", cwd=tmp)
+    proc = _armlab("run", *_SMALL, "seed=5", cwd=tmp)
     assert proc.returncode == 0, proc.stderr
+    (run_dir,) = (tmp / "outputs" / "conditioning_window").iterdir()
     return run_dir, proc
 
 
@@ -112,11 +122,10 @@ def test_run_writes_results_trials_and_prints_the_table(small_run):
     assert "criteria first met" in proc.stdout and f"outputs: {run_dir}" in proc.stdout
 
 
-def test_estimate_reproduces_the_run_from_its_trial_file(small_run):
+def test_estimate_reproduces_the_run_from_its_trial_file(small_run, capsys, monkeypatch):
     run_dir, _ = small_run
-    proc = _armlab("estimate", str(run_dir), cwd=run_dir)
-    assert proc.returncode == 0, proc.stderr
-    out = Path(proc.stdout.strip().splitlines()[-1].removeprefix("outputs: "))
+    monkeypatch.chdir(run_dir)
+    out = _estimate(capsys, str(run_dir))
     assert out.parent == run_dir and out.name.startswith("reestimate_")
     again = json.loads((out / "results.json").read_text())["windows"]
     first = json.loads((run_dir / "results.json").read_text())["windows"]
@@ -125,33 +134,32 @@ def test_estimate_reproduces_the_run_from_its_trial_file(small_run):
         np.testing.assert_allclose(a["K"], b["K"], rtol=1e-9)
         np.testing.assert_allclose(a["D"], b["D"], rtol=1e-9)
     # an estimator override changes the estimate, and the original run is untouched
-    proc = _armlab("estimate", str(run_dir), "estimator.lowpass_hz=40", cwd=run_dir)
-    assert proc.returncode == 0, proc.stderr
-    out40 = Path(proc.stdout.strip().splitlines()[-1].removeprefix("outputs: "))
+    out40 = _estimate(capsys, str(run_dir), "estimator.lowpass_hz=40")
     assert out40 != out
     k40 = json.loads((out40 / "results.json").read_text())["windows"][-1]["K"]
     assert not np.allclose(k40, first[-1]["K"], rtol=1e-6)
     assert json.loads((run_dir / "results.json").read_text())["windows"] == first
 
 
-def test_estimate_writes_into_the_folder_out_names_and_never_over_it(small_run, tmp_path):
+def test_estimate_writes_into_the_folder_out_names_and_never_over_it(
+    small_run, tmp_path, capsys, monkeypatch
+):
     run_dir, _ = small_run
+    monkeypatch.chdir(tmp_path)
     target = tmp_path / "re, estimated"  # a comma and a space: a literal folder name
-    proc = _armlab("estimate", str(run_dir), f"out={target}", cwd=tmp_path)
-    assert proc.returncode == 0, proc.stderr
-    assert proc.stdout.strip().endswith(f"outputs: {target}") and (target / "results.json").is_file()
+    assert _estimate(capsys, str(run_dir), f"out={target}") == target and (target / "results.json").is_file()
     again = json.loads((target / "results.json").read_text())["windows"][-1]["K"]
     np.testing.assert_allclose(again, json.loads((run_dir / "results.json").read_text())["windows"][-1]["K"])
     before = (target / "results.json").read_bytes()
-    proc = _armlab("estimate", str(run_dir), f"out={target}", cwd=tmp_path)
-    assert proc.returncode == 2 and "is not empty" in proc.stderr
+    assert main(["estimate", str(run_dir), f"out={target}"]) == 2
+    assert "is not empty" in capsys.readouterr().err
     assert (target / "results.json").read_bytes() == before
 
 
-def test_run_without_out_writes_a_new_folder_under_outputs(tmp_path):
-    proc = _armlab("run", *_SMALL, cwd=tmp_path)
-    assert proc.returncode == 0, proc.stderr
-    (folder,) = (tmp_path / "outputs" / "conditioning_window").iterdir()
+def test_run_without_out_writes_a_new_folder_under_outputs(small_run):
+    folder, proc = small_run  # the fixture's run names no out=; its folder is the only one there
+    assert folder.parent.parent.name == "outputs"
+    assert re.fullmatch(r"\d{4}-\d\d-\d\d_\d\d-\d\d-\d\d-\d{6}", folder.name), folder.name  # a timestamp
     assert proc.stdout.strip().endswith(f"outputs: {folder}")
     assert (folder / "results.json").is_file()
 
@@ -162,7 +170,14 @@ def test_estimate_rejects_unknown_estimator_field(small_run, capsys):
     assert "unknown estimator field 'nope'" in capsys.readouterr().err
 
 
-@pytest.mark.parametrize("launcher", [[], ["hydra/launcher=joblib"]], ids=["basic", "joblib"])
+# joblib: slow (make test-all). In `make test`, tests/test_resume.py's joblib sweep checks that each
+# joblib job's trials and results are bit-identical to the serial job of the same number, and
+# "basic" here that the serial jobs are separate folders with their own seeds
+@pytest.mark.parametrize(
+    "launcher",
+    [[], pytest.param(["hydra/launcher=joblib"], marks=pytest.mark.slow)],
+    ids=["basic", "joblib"],
+)
 def test_multirun_sweeps_seeds_into_separate_directories(tmp_path, launcher):
     sweep = tmp_path / "sweep"
     args = ["run", "--multirun", "seed=0,1", *_SMALL, *launcher, f"out={sweep}"]
@@ -206,18 +221,15 @@ def test_fractional_elbow_run_writes_its_outputs(fractional_run):
     assert "(27)" in proc.stdout and "paper" in proc.stdout
 
 
-def test_fractional_elbow_reestimate_uses_frf_overrides(fractional_run):
+def test_fractional_elbow_reestimate_uses_frf_overrides(fractional_run, capsys, monkeypatch):
     run_dir, _ = fractional_run
+    monkeypatch.chdir(run_dir)
     first = json.loads((run_dir / "results.json").read_text())
-    proc = _armlab("estimate", str(run_dir), cwd=run_dir)
-    assert proc.returncode == 0, proc.stderr
-    out = Path(proc.stdout.strip().splitlines()[-1].removeprefix("outputs: "))
+    out = _estimate(capsys, str(run_dir))
     again = json.loads((out / "results.json").read_text())
     assert again["five_element_fit"]["k1"] == pytest.approx(first["five_element_fit"]["k1"], rel=1e-9)
     assert again["five_element_rel_err"] == pytest.approx(first["five_element_rel_err"], rel=1e-9)
-    proc = _armlab("estimate", str(run_dir), "frf.welch_window=10000", cwd=run_dir)
-    assert proc.returncode == 0, proc.stderr
-    out = Path(proc.stdout.strip().splitlines()[-1].removeprefix("outputs: "))
+    out = _estimate(capsys, str(run_dir), "frf.welch_window=10000")
     frf = json.loads((out / "results.json").read_text())["frf"]
     assert frf["settings"]["welch_window"] == 10000 and first["frf"]["settings"]["welch_window"] == 5000
     assert frf["mean_coherence"] != pytest.approx(first["frf"]["mean_coherence"], rel=1e-6)

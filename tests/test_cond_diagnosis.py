@@ -56,6 +56,32 @@ def cuff_trials():
     return simulate_protocol(cfg)[0].trials
 
 
+@pytest.fixture(scope="module")
+def cuff_diagnosis(tmp_path_factory, cuff_trials):
+    """The cuff dataset diagnosed once, end to end as `armlab diagnose` does (its trial file written,
+    read back through the protocol's hooks, diagnosed, report and figures written): (folder of
+    trials.h5, output folder, results, series). The series are the diagnoser's own return value,
+    seen on its way (a spy: the diagnosis itself runs unchanged)."""
+    from armlab.data.h5io import write_trials
+    from armlab.runner import diagnose as runner
+
+    tmp = tmp_path_factory.mktemp("cond_diag")
+    write_trials(tmp / "trials.h5", cuff_trials)
+    seen = []
+
+    def spy(*args, **kwargs):
+        seen.append(real(*args, **kwargs))
+        return seen[-1]
+
+    real = runner.run_diagnoser
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(runner, "run_diagnoser", spy)
+        out, res = runner.run_diagnosis(tmp / "trials.h5", "conditioning_window", [], tmp / "out")
+    ((results, series),) = seen
+    assert results is res
+    return tmp, out, res, series
+
+
 def test_nominal_model_recovers_the_exact_truth_without_noise():
     cfg = _cfg()
     cfg = replace(cfg, effects=replace(cfg.effects, force_sensor_noise=None))
@@ -95,8 +121,8 @@ def test_diagnosis_of_the_nominal_lab_is_none(nominal_trials):
     assert ("payload_mass", "arm inertia") in absorbed and ("plane_tilt", "arm stiffness") in absorbed
 
 
-def test_cuff_compliance_is_found_with_its_stiffness(cuff_trials):
-    res, series = diagnose_cond(cuff_trials, DiagnosisConfig())
+def test_cuff_compliance_is_found_with_its_stiffness(cuff_diagnosis):
+    _, _, res, series = cuff_diagnosis  # diagnose_cond with the default DiagnosisConfig()
     assert res["verdict"][0] == "cuff_compliance"
     c = res["how_far"][1]["nonlinear_parameters"]["cuff_compliance.compliance_m_per_N"]
     assert 1 / c == pytest.approx(6000.0, rel=0.3)  # N/m, the simulated cuff
@@ -183,15 +209,13 @@ def test_referee_dataset_hides_the_truth(tmp_path):
     assert len(COND_CLASSES) >= 9
 
 
-def test_cli_diagnose_writes_report_and_never_overwrites(tmp_path, cuff_trials):
-    from armlab.data.h5io import write_trials
+def test_cli_diagnose_writes_report_and_never_overwrites(cuff_diagnosis):
     from armlab.runner.diagnose import run_diagnosis
 
-    write_trials(tmp_path / "trials.h5", cuff_trials)
-    out, res = run_diagnosis(tmp_path / "trials.h5", "conditioning_window", [], tmp_path / "out")
+    data, out, res, _ = cuff_diagnosis
     report = (out / "report.md").read_text()
     assert "cuff" in report and "Where the gap lies" in report
     assert json.loads((out / "results.json").read_text())["verdict"] == res["verdict"]
     assert (out / "diagnosis.rrd").stat().st_size > 0
     with pytest.raises(DataError, match="never overwrites"):
-        run_diagnosis(tmp_path / "trials.h5", "conditioning_window", [], out)
+        run_diagnosis(data / "trials.h5", "conditioning_window", [], out)

@@ -72,17 +72,19 @@ def test_run_estimate_recovers_the_plant(tmp_path):
     assert proc.returncode == 2 and "must look like fit.<field>=<value>" in proc.stderr
 
 
-def test_override_of_a_group_the_toy_does_not_read_is_refused(tmp_path):
-    proc = _cli("run", f"protocol={toy.NAME}", "arm.cocontraction=0.3", f"out={tmp_path / 'r'}")
-    assert proc.returncode == 2
-    assert f"'arm' is not read by protocol '{toy.NAME}'" in proc.stderr and "'plant'" in proc.stderr
+# refusals in this process (the toy registered by the fixture): a fresh process that registers
+# it is checked above and below, and the refusals happen before any run starts
+def test_override_of_a_group_the_toy_does_not_read_is_refused(registered, tmp_path, capsys):
+    assert main(["run", f"protocol={toy.NAME}", "arm.cocontraction=0.3", f"out={tmp_path / 'r'}"]) == 2
+    err = capsys.readouterr().err
+    assert f"'arm' is not read by protocol '{toy.NAME}'" in err and "'plant'" in err
     assert not (tmp_path / "r").exists()
 
 
-def test_effects_it_does_not_simulate_are_refused(tmp_path):
-    proc = _cli("run", f"protocol={toy.NAME}", "effects=[reflex]", f"out={tmp_path / 'r'}")
-    assert proc.returncode == 2
-    assert f"effects ['reflex'] are not simulated by protocol '{toy.NAME}'" in proc.stderr
+def test_effects_it_does_not_simulate_are_refused(registered, tmp_path, capsys):
+    assert main(["run", f"protocol={toy.NAME}", "effects=[reflex]", f"out={tmp_path / 'r'}"]) == 2
+    assert f"effects ['reflex'] are not simulated by protocol '{toy.NAME}'" in capsys.readouterr().err
+    assert not (tmp_path / "r").exists()
 
 
 @pytest.mark.parametrize(("delay_s", "verdict"), [(0.0, ["none"]), (0.003, ["channel_delay"])])

@@ -41,16 +41,19 @@ def test_classes_cover_none_singles_a_pair_and_a_left_out_effect():
 @pytest.mark.parametrize(
     ("protocol_items", "classes"),
     [
-        (["referee.trial_s=20"], ["none", "reflex", "force_sensor_bandwidth", "left_out:reflex"]),
+        (["referee.trial_s=12"], ["none", "reflex", "force_sensor_bandwidth", "left_out:reflex"]),
         (
-            ["referee.protocol=conditioning_window"],
+            ["referee.protocol=conditioning_window", "referee.cond_trials=18"],
             ["none", "cuff_compliance", "joint_friction", "left_out:reflex"],
         ),
     ],
 )
 def test_small_blind_benchmark(tmp_path, protocol_items, classes):
     # CI size: four classes, one replicate each, evaluation seeds, for each protocol; the full
-    # 10 x 10 run is `armlab diagnose-benchmark` (make test-all: test_full_benchmark_...)
+    # 10 x 10 run is `armlab diagnose-benchmark` (make test-all: test_full_benchmark_...).
+    # Shorter datasets than the defaults, about half the diagnosis time: 12 s joint trials (4/4
+    # correct on the evaluation seeds 1000 and 1001, as with 20 s) and 18 conditioning trials, 3
+    # per direction (4/4 on seed 1000 and 3/4 on seed 1001, as with the protocol's 30)
     overrides = ["referee.replicates=1", f"referee.classes=[{','.join(classes)}]", *protocol_items]
     out, summary = run_benchmark(overrides, tmp_path / "bench")
     assert summary["n_cases"] == 4
