@@ -2,11 +2,10 @@
 
 from __future__ import annotations
 
-import copy
-
 import mujoco
 import numpy as np
 import pytest
+from contact_check import assert_contacts_off_changes_nothing
 
 from armlab.config.schema import ElbowConfig, SimConfig
 from armlab.models.direct_drive_scene import build_direct_drive_scene
@@ -61,18 +60,12 @@ def test_disabling_contacts_changes_no_trajectory():
     # the lab skips collision detection (no geom collides); with it switched back on the
     # trajectory must be the same bit for bit, and the scene must carry the flag (the speed)
     scene = build_direct_drive_scene(ElbowConfig(), SimConfig())
-    assert scene.model.opt.disableflags & mujoco.mjtDisableBit.mjDSBL_CONTACT
-    assert 'contact="disable"' in scene.xml
-    with_contacts = copy.copy(scene.model)
-    with_contacts.opt.disableflags &= ~int(mujoco.mjtDisableBit.mjDSBL_CONTACT)
-    runs = []
-    for model in (scene.model, with_contacts):
-        data = mujoco.MjData(model)
+
+    def swing(data):
         data.qpos[scene.motor_qpos] = 0.3  # a swing of the link and the hand
         data.ctrl[scene.motor_act] = 2.0
-        mujoco.mj_step(model, data, nstep=2000)
-        runs.append(np.concatenate([data.qpos, data.qvel, data.act]))
-    np.testing.assert_array_equal(runs[0], runs[1])
+
+    assert_contacts_off_changes_nothing(scene, swing, 2000)
 
 
 def test_a_scene_without_contacts_refuses_a_geom_that_could_collide():
