@@ -65,3 +65,12 @@ def test_default_out_is_a_new_timestamped_folder_under_the_working_folder():
     b = default_out("diagnose")
     assert a.parts[:2] == ("outputs", "diagnose") and not a.is_absolute()
     assert a != b
+
+
+def test_the_resume_command_keeps_a_folder_with_spaces_one_shell_word():
+    import shlex
+
+    from armlab.data.rundir import resume_command
+
+    assert resume_command("/tmp/plain") == "armlab run resume=true out=/tmp/plain"  # unquoted as before
+    assert shlex.split(resume_command("/tmp/my run")) == ["armlab", "run", "resume=true", "out=/tmp/my run"]

@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import os
 import re
+import shlex
 import shutil
 import signal
 import subprocess
@@ -36,11 +37,11 @@ TOY = [f"protocol={toy.NAME}", "seed=3"]
 SMALL = ["scenario.k_values=[1,26]", "scenario.n_trials=7", "output.recording=false", "output.figures=false"]
 
 
-def _toy_cli(*args: str, wait: bool = True):
+def _toy_cli(*args: str, wait: bool = True, cwd: Path = ROOT):
     cmd = [sys.executable, str(Path(toy.__file__)), *args]
     if not wait:
-        return subprocess.Popen(cmd, cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    return subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True, timeout=300)
+        return subprocess.Popen(cmd, cwd=cwd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    return subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, timeout=300)
 
 
 def _armlab(*args: str, wait: bool = True):
@@ -297,6 +298,26 @@ def test_interrupted_sweep_resumes_to_the_uninterrupted_results(tmp_path):
     for job in ("0", "1", "2"):
         _same_run(ref / job, run / job)
     assert not _temporaries(run)
+
+
+def test_an_interrupted_sweep_without_out_names_its_default_folder_as_one_shell_word(tmp_path):
+    # no out=: Hydra's default folder (outputs/multirun/<protocol>/<time> under the working
+    # folder, here a folder with a space) is the one the message tells to resume, quoted
+    work = tmp_path / "my work"
+    work.mkdir()
+    proc = _toy_cli("run", "--multirun", f"protocol={toy.NAME}", "seed=0,1,2", wait=False, cwd=work)
+    end = time.monotonic() + 120
+    while not list(work.glob("outputs/multirun/*/*/1/.hydra/overrides.yaml")):
+        assert proc.poll() is None, proc.communicate()
+        assert time.monotonic() < end, "job 1 never started"
+        time.sleep(0.05)
+    proc.send_signal(signal.SIGTERM)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 128 + signal.SIGTERM
+    (sweep,) = {p.parents[2] for p in work.glob("outputs/multirun/*/*/1/.hydra/overrides.yaml")}
+    command = err.split("`")[1]
+    words = ["armlab", "run", "--multirun", "resume=true", f"out={sweep}", "<same", "sweep>"]
+    assert shlex.split(command) == words
 
 
 def test_joblib_sweep_interrupted_resumes_bit_identical_to_a_serial_one(tmp_path):

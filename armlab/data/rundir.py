@@ -11,6 +11,7 @@ from it, resume included.
 
 from __future__ import annotations
 
+import shlex
 import shutil
 from pathlib import Path
 from typing import Literal
@@ -80,7 +81,7 @@ def _is_log(p: Path) -> bool:
 
 def resume_command(folder: str | Path) -> str:
     """The command line that finishes the incomplete run in ``folder`` (its stored overrides)."""
-    return f"armlab run resume=true out={Path(folder)}"
+    return f"armlab run resume=true {shlex.quote(f'out={Path(folder)}')}"  # a shell word, spaces and all
 
 
 def _is_run_folder(folder: Path) -> bool:

@@ -10,6 +10,7 @@ from the registry; nothing here names one.
 from __future__ import annotations
 
 import os
+import shlex
 import sys
 import warnings
 from pathlib import Path
@@ -165,8 +166,10 @@ def launch(args: list[str], *, progress: bool = True) -> int:
             wrapped()
     except interrupt.Interrupted as exc:
         if multirun:
-            where = sweep or "<sweep folder>"
-            fix = f"armlab run --multirun resume=true out={where} <same sweep>"
+            # the folder given, else Hydra's default one: the parent of a started job's folder
+            where = sweep or (Path(started[-1]).parent if started else None)
+            out = shlex.quote(f"out={where}") if where is not None else "out=<sweep folder>"
+            fix = f"armlab run --multirun resume=true {out} <same sweep>"
         else:
             fix = resume_command(started[-1] if started else "<run folder>")
         print(
