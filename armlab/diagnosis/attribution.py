@@ -141,24 +141,25 @@ def select_effects(
         tried = [n for n in candidates if n not in names and _INCOMPATIBLE.get(n) not in names]
         progress.stage(f"try effects (step {step + 1})", len(tried), "candidates")
 
-        def fit(sur, selected=tuple(selected), current=current):
-            return fit_model(
-                trials,
-                y_band,
-                (*selected, sur),
-                hp,
-                theta0=current.theta,
-                nominal_beta=nominal.beta,
-                family=family,
-            )
-
-        fitted = {n for n in tried if candidates[n].kind != "absorbed"}
         # the candidates' fits are independent: on threads (NumPy's FFTs, SciPy's filters and
         # BLAS release the GIL), each the same computation as alone, so the same numbers
-        with ThreadPoolExecutor(max_workers=max(1, min(len(fitted), os.cpu_count() or 1))) as pool:
-            fits = {n: pool.submit(fit, candidates[n]) for n in tried if n in fitted}
+        with ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
+            fits = {
+                n: pool.submit(
+                    fit_model,
+                    trials,
+                    y_band,
+                    (*selected, candidates[n]),
+                    hp,
+                    theta0=current.theta,
+                    nominal_beta=nominal.beta,
+                    family=family,
+                )
+                for n in tried
+                if candidates[n].kind != "absorbed"
+            }
             for name in tried:  # in the candidates' order, as the ranking's ties are broken
-                if name not in fitted:
+                if name not in fits:
                     entries.append(_entry(name, gap_c, gap_c, 0.0, 0, excess0, None, identifiable=False))
                     progress.advance()
                     continue
