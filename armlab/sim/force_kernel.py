@@ -138,10 +138,11 @@ def control_periods(
 
     ``mp``/``dp`` are :func:`mj_pointers`; ``qpos``, ``sd`` (sensordata), ``ctrl``, ``act``,
     ``length``/``velocity`` (actuator) are views of the same MjData. Each period records into
-    ``rec`` (7, total): f_measured, f_true, theta_measured, theta, phi, current, tau_dym; ``act_rec``
-    (total, na); ``hist_len``/``hist_vel`` (total, nu) the actuators' state the reflex reads; it
-    writes ``mrows[k - mrow0]`` into the muscle controls ``midx`` (none when ``midx`` is empty) and
-    steps the fractional element (``el_x``, when ``p.el_act >= 0``).
+    ``rec`` (7, total): f_measured, f_true, theta_measured, theta, phi, current, tau_dym;
+    ``act_rec`` (total, na); ``hist_len``/``hist_vel`` (total, nu) the actuators' state the reflex
+    reads ((total, 0): none). It writes ``mrows[k - mrow0]`` into the muscle controls ``midx``
+    (none when ``midx`` is empty) and steps the fractional element (``el_x``, when
+    ``p.el_act >= 0``).
     """
     dt, link = p.dt, p.link
     for k in range(k0, k1):
@@ -197,7 +198,7 @@ def control_periods(
         ctrl[p.motor_act] = current
         for j in range(midx.size):
             ctrl[midx[j]] = mrows[k - mrow0, j]
-        for j in range(length.size):
+        for j in range(hist_len.shape[1]):  # (none recorded when the array has no columns)
             hist_len[k, j] = length[j]
             hist_vel[k, j] = velocity[j]
         phi = qpos[p.qe]

@@ -16,6 +16,8 @@ import numpy as np
 
 from armlab.config.schema import ElbowConfig, ReflexConfig
 from armlab.errors import SimulationError
+from armlab.models.direct_drive_scene import DirectDriveScene
+from armlab.models.oustaloup import FractionalElement
 from armlab.sim.force_kernel import (
     CURRENT_DUTY,
     CURRENT_RUN,
@@ -51,14 +53,43 @@ _BLOCK_PERIODS = 200
 
 
 def run_periods(
-    scene, params: ControlParams, ref, noise, elbow, reflex, muscle_base, element, fs_hz, who, trial, n_settle
-):
-    """``(rec, act_rec, data)`` of one trial from rest (see :meth:`_Trial.periods`)."""
-    run = _Trial(scene, params, ref, noise, elbow, reflex, muscle_base, element, fs_hz)
+    scene: DirectDriveScene,
+    params: ControlParams,
+    ref: np.ndarray,
+    noise: tuple[np.ndarray, np.ndarray, np.ndarray],
+    elbow: ElbowConfig,
+    reflex: ReflexConfig,
+    muscle_base: np.ndarray | None,
+    element: FractionalElement | None,
+    fs_hz: float,
+    who: TrialLabels,
+    trial: int,
+    n_settle: int,
+) -> tuple[np.ndarray, np.ndarray, mujoco.MjData]:
+    """Every control period of one trial from rest, settle included.
+
+    Args:
+        scene, params: the direct-drive scene and the controller's constants.
+        ref: (total,) N, the force reference; ``noise``: the force, encoder and accelerometer
+            noise of every period, (total,) each.
+        elbow, reflex, muscle_base: the muscles' co-contraction, reflex and per-period base
+            commands (None: the co-contraction).
+        element: the fractional element, if the scene has one.
+        fs_hz, who, trial, n_settle: the control rate; the labels, trial and settle periods an
+            error is named with.
+
+    Returns:
+        ``rec`` (7, total): f_measured, f_true, theta_measured, theta, phi, current, tau_dym;
+        ``act_rec`` (total, na) the activations; ``data`` after the last period.
+
+    Raises:
+        SimulationError: a check failed (its period and cause named).
+    """
+    args = (scene, params, ref, noise, elbow, reflex, muscle_base, element, fs_hz, who, trial, n_settle)
     try:
-        return run.periods(_BLOCK_PERIODS, who, trial, n_settle)
+        return _periods(_BLOCK_PERIODS, *args)
     except _Reset:  # replayed period by period from the start, it stops at the period of the reset
-        return run.periods(1, who, trial, n_settle)
+        return _periods(1, *args)
 
 
 class _MuscleCommands:
@@ -87,14 +118,12 @@ class _MuscleCommands:
         self.reflex = reflex if reflex.enabled else None
         self.total = total
         self.data, self.muscles = data, muscles
-        self.hist_len = np.empty((total, data.actuator_length.size))
-        self.hist_vel = np.empty((total, data.actuator_velocity.size))
-        self.rows, self.row0, self.stop = (
-            np.ascontiguousarray(np.broadcast_to(self.base, (total, muscles.size))),
-            0,
-            total,
-        )
-        if self.reflex is not None:
+        # the actuators' state the kernel records each period: only the reflex reads it
+        n = data.actuator_length.size if self.reflex is not None else 0
+        self.hist_len, self.hist_vel = np.empty((total, n)), np.empty((total, n))
+        if self.reflex is None:  # the base commands, row by row (muscle_base, since no reflex)
+            self.rows, self.row0, self.stop = np.ascontiguousarray(self.base, dtype=float), 0, total
+        else:
             self.lag1 = max(1, int(round(reflex.stretch_latency_s * fs_hz)))
             self.lag2 = max(1, int(round(reflex.spinal_latency_s * fs_hz)))
             self.len_ref = data.actuator_length[muscles].copy()
@@ -123,87 +152,79 @@ class _Reset(Exception):
     """MuJoCo reset a diverged state somewhere in a block of periods."""
 
 
-class _Trial:
-    """One trial's controller loop from rest: the kernel over blocks of periods (:mod:`.force_kernel`)."""
+def _periods(block, scene, p, ref, noise, elbow, reflex, muscle_base, element, fs_hz, who, trial, n_settle):
+    """:func:`run_periods`, ``block`` periods per kernel call.
 
-    def __init__(self, scene, params, ref, noise, elbow, reflex, muscle_base, element, fs_hz) -> None:
-        self.scene, self.p, self.ref, self.noise, self.fs_hz = scene, params, ref, noise, fs_hz
-        self.elbow, self.reflex, self.muscle_base, self.element = elbow, reflex, muscle_base, element
-
-    def periods(self, block: int, who: TrialLabels, trial: int, n_settle: int):
-        """``(rec, act_rec, data)`` of every period, run ``block`` periods per kernel call.
-
-        Raises:
-            _Reset: MuJoCo reset the state within a block of more than one period.
-            SimulationError: a check failed (with its period), or a reset with ``block == 1``.
-        """
-        m, p, ref = self.scene.model, self.p, self.ref
-        total = ref.size
-        data = mujoco.MjData(m)
-        muscles = self.scene.muscle_act
-        if muscles.size:
-            data.act[m.actuator_actadr[muscles]] = self.elbow.cocontraction
-            data.ctrl[muscles] = self.elbow.cocontraction
-        el = (np.zeros((0, 0)), np.zeros(0), np.zeros(0), np.zeros(0))
-        if self.element is not None:
-            e = self.element
-            el = tuple(np.ascontiguousarray(a, dtype=float) for a in (e.A, e.B, e.C, e.initial_state(0.0)))
-        mujoco.mj_forward(m, data)
-        commands = None  # without reflex or a subject's commands the co-contraction written above holds
-        midx, rows, row0, stop = np.zeros(0, np.int64), np.zeros((1, 0)), 0, total
-        if muscles.size and (self.reflex.enabled or self.muscle_base is not None):
-            commands = _MuscleCommands(
-                data, muscles, self.elbow, self.reflex, self.muscle_base, total, self.fs_hz
-            )
-            midx = np.asarray(muscles, np.int64)
-        hist_len = commands.hist_len if commands else np.empty((total, m.nu))
-        hist_vel = commands.hist_vel if commands else np.empty((total, m.nu))
-        st = np.zeros(STATE_SIZE)
-        rec, act_rec = np.empty((7, total)), np.zeros((total, m.na))
-        mp, dp = mj_pointers(m, data)
-        views = (
-            data.qpos,
-            data.sensordata,
-            data.ctrl,
-            data.act,
-            data.actuator_length,
-            data.actuator_velocity,
+    Raises:
+        _Reset: MuJoCo reset the state within a block of more than one period.
+        SimulationError: a check failed (with its period), or a reset with ``block == 1``.
+    """
+    m = scene.model
+    total = ref.size
+    data = mujoco.MjData(m)
+    muscles = scene.muscle_act
+    if muscles.size:
+        data.act[m.actuator_actadr[muscles]] = elbow.cocontraction
+        data.ctrl[muscles] = elbow.cocontraction
+    el = (np.zeros((0, 0)), np.zeros(0), np.zeros(0), np.zeros(0))
+    if element is not None:
+        states = (element.A, element.B, element.C, element.initial_state(0.0))
+        el = tuple(np.ascontiguousarray(a, dtype=float) for a in states)
+    mujoco.mj_forward(m, data)
+    commands = None  # without reflex or a subject's commands the co-contraction written above holds
+    midx, rows, row0, stop = np.zeros(0, np.int64), np.zeros((1, 0)), 0, total
+    if muscles.size and (reflex.enabled or muscle_base is not None):
+        commands = _MuscleCommands(data, muscles, elbow, reflex, muscle_base, total, fs_hz)
+        midx = np.asarray(muscles, np.int64)
+    no_history = np.empty((total, 0))  # nothing reads the actuators' history
+    hist_len = commands.hist_len if commands else no_history
+    hist_vel = commands.hist_vel if commands else no_history
+    st = np.zeros(STATE_SIZE)
+    rec, act_rec = np.empty((7, total)), np.zeros((total, m.na))
+    mp, dp = mj_pointers(m, data)
+    views = (
+        data.qpos,
+        data.sensordata,
+        data.ctrl,
+        data.act,
+        data.actuator_length,
+        data.actuator_velocity,
+    )
+    period_s = p.substeps * m.opt.timestep
+    k = 0
+    while k < total:
+        if commands is not None:
+            rows, row0, stop = commands.block(k)
+        end = min(k + block, stop, total)
+        status, k_stop = control_periods(
+            mp,
+            dp,
+            k,
+            end,
+            p,
+            st,
+            ref,
+            *noise,
+            *views,
+            rec,
+            act_rec,
+            hist_len,
+            hist_vel,
+            rows,
+            row0,
+            midx,
+            *el,
         )
-        period_s = p.substeps * m.opt.timestep
-        k = 0
-        while k < total:
-            if commands is not None:
-                rows, row0, stop = commands.block(k)
-            end = min(k + block, stop, total)
-            status, k_stop = control_periods(
-                mp,
-                dp,
-                k,
-                end,
-                p,
-                st,
-                ref,
-                *self.noise,
-                *views,
-                rec,
-                act_rec,
-                hist_len,
-                hist_vel,
-                rows,
-                row0,
-                midx,
-                *el,
-            )
-            stepped = k_stop + 1 if status == NONFINITE else k_stop
-            # MuJoCo resets a diverged state (its clock restarts at 0) and warns
-            if not abs(data.time - stepped * period_s) < 0.5 * m.opt.timestep:
-                if block > 1:
-                    raise _Reset
-                status = NONFINITE
-            if status != OK:
-                raise _failure(status, k_stop, st, p, data, who, trial, n_settle, total, self.fs_hz)
-            k = end
-        return rec, act_rec, data
+        stepped = k_stop + 1 if status == NONFINITE else k_stop
+        # MuJoCo resets a diverged state (its clock restarts at 0) and warns
+        if not abs(data.time - stepped * period_s) < 0.5 * m.opt.timestep:
+            if block > 1:
+                raise _Reset
+            status = NONFINITE
+        if status != OK:
+            raise _failure(status, k_stop, st, p, data, who, trial, n_settle, total, fs_hz)
+        k = end
+    return rec, act_rec, data
 
 
 def _failure(status, k, st, p, data, who, trial, n_settle, total, fs_hz) -> SimulationError:
