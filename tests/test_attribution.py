@@ -130,3 +130,39 @@ def test_payload_mass_is_listed_but_never_selected():
             "separating_trial": "empty-handle trials (no subject attached)",
         }
     ]
+
+
+def test_candidates_fitted_on_threads_rank_as_fitted_one_after_the_other(monkeypatch):
+    # select_effects fits a step's candidates on threads; each fit must be the same computation
+    # as alone: the rankings (every gap and delta-BIC, as floats) equal those of a serial pool
+    from concurrent.futures import Future
+
+    from armlab.diagnosis import attribution, families
+
+    names = ["reflex", "joint_friction", "channel_delay", "payload_mass"]
+    threaded = _select(reflex_joint_torque, names)
+
+    class Serial:  # the pool's interface, each fit run at submit on this thread
+        def __init__(self, max_workers=None):
+            pass
+
+        def __enter__(self):
+            return self
+
+        def __exit__(self, *exc):
+            return False
+
+        def submit(self, fn, *args, **kwargs):
+            fut = Future()
+            fut.set_result(fn(*args, **kwargs))
+            return fut
+
+    monkeypatch.setattr(attribution, "ThreadPoolExecutor", Serial)
+    families._SPECTRA.clear()  # no spectrum remembered from the threaded run
+    serial = _select(reflex_joint_torque, names)
+    assert serial.verdict == threaded.verdict == ["reflex"]
+
+    def table(sel):
+        return [[(e["name"], e["held_out_gap"], e["delta_bic"]) for e in step] for step in sel.rankings]
+
+    assert table(serial) == table(threaded)

@@ -158,17 +158,21 @@ def select_effects(
                 for n in tried
                 if candidates[n].kind != "absorbed"
             }
-            for name in tried:  # in the candidates' order, as the ranking's ties are broken
-                if name not in fits:
-                    entries.append(_entry(name, gap_c, gap_c, 0.0, 0, excess0, None, identifiable=False))
+            try:
+                for name in tried:  # in the candidates' order, as the ranking's ties are broken
+                    if name not in fits:
+                        entries.append(_entry(name, gap_c, gap_c, 0.0, 0, excess0, None, identifiable=False))
+                        progress.advance()
+                        continue
+                    fm = fits[name].result()
+                    gap, rss, _ = held_out_gap(fm, trials, y_band)
+                    dp = fm.n_params - current.n_params
+                    dbic = n_eff * np.log(rss / rss_c) + dp * np.log(n_eff)
+                    entries.append(_entry(name, gap_c, gap, float(dbic), dp, excess0, fm))
                     progress.advance()
-                    continue
-                fm = fits[name].result()
-                gap, rss, _ = held_out_gap(fm, trials, y_band)
-                dp = fm.n_params - current.n_params
-                dbic = n_eff * np.log(rss / rss_c) + dp * np.log(n_eff)
-                entries.append(_entry(name, gap_c, gap, float(dbic), dp, excess0, fm))
-                progress.advance()
+            except BaseException:  # an interrupt: the fits not started are dropped, not waited for
+                pool.shutdown(cancel_futures=True)
+                raise
         entries.sort(key=lambda e: e["delta_bic"])
         rankings.append(entries)
         best = entries[0] if entries else None

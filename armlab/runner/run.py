@@ -16,6 +16,7 @@ from concurrent.futures import ThreadPoolExecutor
 from datetime import datetime
 from pathlib import Path
 
+import numpy as np
 from omegaconf import OmegaConf
 
 from armlab import progress
@@ -45,7 +46,8 @@ __all__ = [
 
 def _saved_trials(trials: TrialSet, extra_attrs: dict) -> TrialSet:
     """What the trial file holds: drawing aids (body points) stay out of it. Its own dicts, taken
-    before the file is written in the background, so the estimation cannot change what is saved."""
+    before the file is written in the background (the arrays are shared: :func:`_run` makes them
+    read-only until the file is written)."""
     saved = {k: v for k, v in trials.channels.items() if not k.endswith("_points")}
     return TrialSet(
         fs_hz=trials.fs_hz,
@@ -57,6 +59,14 @@ def _saved_trials(trials: TrialSet, extra_attrs: dict) -> TrialSet:
     )
 
 
+def _freeze(arrays) -> list[np.ndarray]:
+    """Make the writeable ones of ``arrays`` read-only; returns them (to be made writeable again)."""
+    frozen = [a for a in arrays if isinstance(a, np.ndarray) and a.flags.writeable]
+    for a in frozen:
+        a.flags.writeable = False
+    return frozen
+
+
 def _run(cfg: ExperimentConfig, out_dir: Path, config_yaml: str, timing: dict) -> dict:
     from armlab import viz  # the only place figures and recordings are made
 
@@ -66,36 +76,42 @@ def _run(cfg: ExperimentConfig, out_dir: Path, config_yaml: str, timing: dict) -
     # then the trial file is compressed (HDF5's deflate runs without the GIL) from the end of the
     # simulation on, while the protocol estimates and then draws its figures and recording;
     # leaving the block waits for it, so the file is complete (or its error raised) before
-    # results.json can mark the run complete, and no write outlives a failed estimation.
-    with ThreadPoolExecutor(max_workers=1) as background:
-        if cfg.output.recording:
-            background.submit(viz.preload_rerun)
-        t0 = time.perf_counter()
-        progress.stage("simulate")  # each stage's size, where known, comes from the computation
-        sim = protocol.simulate(cfg)
-        timing["simulate_s"] = time.perf_counter() - t0
-        trials = sim.trials
-        saving = (
-            background.submit(
-                write_trials,
-                out_dir / "trials.h5",
-                _saved_trials(trials, {"config_yaml": config_yaml, **sim.attrs}),
+    # results.json can mark the run complete; a failed estimation still leaves the complete trial
+    # file (the folder is then an unfinished run, which `resume=true` finishes). The arrays saved
+    # are read-only while the file is written: an in-place write by the estimation or the outputs
+    # raises instead of changing the file.
+    frozen: list[np.ndarray] = []
+    try:
+        with ThreadPoolExecutor(max_workers=1) as background:
+            if cfg.output.recording:
+                background.submit(viz.preload_rerun)
+            t0 = time.perf_counter()
+            progress.stage("simulate")  # each stage's size, where known, comes from the computation
+            sim = protocol.simulate(cfg)
+            timing["simulate_s"] = time.perf_counter() - t0
+            trials = sim.trials
+            saving = None
+            if cfg.output.trials:
+                saved = _saved_trials(trials, {"config_yaml": config_yaml, **sim.attrs})
+                frozen += _freeze([saved.onset_index, *saved.channels.values(), *saved.trial_meta.values()])
+                saving = background.submit(write_trials, out_dir / "trials.h5", saved)
+            t1 = time.perf_counter()
+            progress.stage("estimate")
+            results, series = sim.estimate()
+            timing["estimate_s"] = time.perf_counter() - t1
+            results["simulated_s"] = trials.n_trials * trials.n_samples / trials.fs_hz
+            t2 = time.perf_counter()
+            progress.stage("outputs")
+            write_new(out_dir / "scene.xml", sim.scene_xml)
+            ctx = OutputContext(
+                viz=viz, out_dir=out_dir, trials=trials, results=results, series=series, cfg=cfg
             )
-            if cfg.output.trials
-            else None
-        )
-        t1 = time.perf_counter()
-        progress.stage("estimate")
-        results, series = sim.estimate()
-        timing["estimate_s"] = time.perf_counter() - t1
-        results["simulated_s"] = trials.n_trials * trials.n_samples / trials.fs_hz
-        t2 = time.perf_counter()
-        progress.stage("outputs")
-        write_new(out_dir / "scene.xml", sim.scene_xml)
-        ctx = OutputContext(viz=viz, out_dir=out_dir, trials=trials, results=results, series=series, cfg=cfg)
-        written = protocol.outputs(ctx) if protocol.outputs is not None else {}
-        if saving is not None:
-            saving.result()
+            written = protocol.outputs(ctx) if protocol.outputs is not None else {}
+            if saving is not None:
+                saving.result()
+    finally:  # the writer has finished (leaving the pool waits for it)
+        for arr in frozen:
+            arr.flags.writeable = True
     results["files"] = {k: str(v) for k, v in written.items()}
     timing["outputs_s"] = time.perf_counter() - t2
     return results

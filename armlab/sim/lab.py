@@ -185,10 +185,12 @@ def record_trials(
     active = subject is not None and subject.active
     # The subject's fluctuation needs no scene: it is drawn on a second thread while the scene is
     # built and settled and the robot paths are solved (its own generator: the same numbers).
+    if active and subject_rng is None:
+        raise ConfigError("an active subject fluctuation needs its own generator (subject_rng)")
     with ThreadPoolExecutor(max_workers=1) as early:
         drawing = (
             early.submit(fluctuation, subject, plan.n_trials, n_samples, len(MUSCLES), fs, subject_rng)
-            if active and subject_rng is not None
+            if active
             else None
         )
         scene = build_scene(cfg.arm, cfg.cuff, cfg.robot, cfg.sim)
@@ -212,8 +214,6 @@ def record_trials(
         targets = robot_targets(scene, hold, q0, plan, scenario.directions_rad, t_rel)
         muscle_base = hold.activation
         if active:
-            if subject_rng is None:
-                raise ConfigError("an active subject fluctuation needs its own generator (subject_rng)")
             muscle_base = commands(hold.activation, drawing.result(), n_steps, substeps)
     who = TrialLabels(
         protocol=cfg.protocol_name,
