@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 from conftest import assert_png, verify_rrd
@@ -210,3 +212,78 @@ def test_recording_refuses_overwrite_and_bad_input(tmp_path):
 
 def test_view_command_is_plain():
     assert view_command("runs/x/recording.rrd") == ["rerun", "runs/x/recording.rrd"]
+
+
+@pytest.mark.parametrize("lo, hi", [(1e-3, 1e2), (0.25, 8.0), (0.2, 1.2), (0.031, 0.039), (2e3, 4e5)])
+def test_plain_log_ticks_label_the_ticks_matplotlib_labels_in_plain_text(lo, hi):
+    """The plain-text log labels (no mathtext parse) name the same ticks with the same numbers as
+    matplotlib's own mathtext labels, e.g. ``$\\mathdefault{2\\times10^{-1}}$`` -> ``2×10⁻¹``."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    from armlab.viz._ticks import plain_log_ticks
+
+    def labels(ax):
+        return [t.get_text() for t in ax.get_yticklabels() + ax.yaxis.get_minorticklabels() if t.get_text()]
+
+    fig = Figure()
+    FigureCanvasAgg(fig)
+    ax = fig.subplots()
+    ax.semilogy([0, 1], [lo, hi])
+    fig.canvas.draw()
+    sup = str.maketrans("-0123456789", "⁻⁰¹²³⁴⁵⁶⁷⁸⁹")
+
+    def plain(label: str) -> str:  # matplotlib's mathtext label written as ours is
+        body = label.removeprefix("$\\mathdefault{").removesuffix("}$").replace("\\times", "×")
+        base, _, exponent = body.partition("10^{")
+        return base + "10" + exponent.rstrip("}").translate(sup)
+
+    expected = [plain(s) for s in labels(ax)]
+    plain_log_ticks(ax.yaxis)
+    fig.canvas.draw()
+    assert labels(ax) == expected
+    assert not any("$" in s for s in labels(ax))
+
+
+def _chunks(path: Path, entity: str) -> dict[bool, object]:
+    """{static?: the record batch} of ``entity`` in the recording, or skip without rerun's reader."""
+    try:
+        from rerun.chunk import RrdReader
+    except ImportError:
+        pytest.skip("this rerun has no rerun.chunk.RrdReader")
+    return {
+        c.is_static: c.to_record_batch()
+        for c in RrdReader(str(path)).store().stream().to_chunks()
+        if c.entity_path == entity
+    }
+
+
+def test_recording_logs_each_window_as_one_entity_of_all_its_trials(tmp_path):
+    """Trials of a window sharing an onset are one entity: every row holds each trial's axes in
+    trial order, named ``t<i> <axis>``, with the values of the trial file (to float32)."""
+    import dataclasses
+
+    trials = dataclasses.replace(_trials(), onset_index=np.full(6, 100))
+    path = write_recording(tmp_path / "run.rrd", trials, _results(), max_scalar_hz=None)
+    force = _chunks(path, "/trials/k02/hand_force")  # window 2: trials 2 and 3
+    assert force[True].column("SeriesLines:names").to_pylist() == [
+        ["t002 F_x [N]", "t002 F_y [N]", "t003 F_x [N]", "t003 F_y [N]"]
+    ]
+    t_s = np.array([t.total_seconds() for t in force[False].column("trial_time").to_pylist()])
+    rows = np.asarray(force[False].column("Scalars:scalars").to_pylist())
+    assert rows.shape == (trials.n_samples, 4)  # every sample, 2 trials x 2 axes
+    assert t_s[100] == 0.0  # the onset sample at t = 0
+    expected = trials.channels["hand_force"][[2, 3]].transpose(1, 0, 2).reshape(-1, 4)
+    np.testing.assert_array_equal(rows, expected.astype(np.float32).astype(np.float64))
+    text = _chunks(path, "/trials/k02/events")[False].column("TextLog:text").to_pylist()
+    assert "t002 direction=2" in text[0][0] and "t003 direction=3" in text[0][0]
+    strips = _chunks(path, "/trials/k02/pose/arm")[False].column("LineStrips3D:strips").to_pylist()
+    assert all(len(row) == 2 for row in strips)  # one strip per trial in every row
+
+
+def test_recording_splits_a_window_whose_trials_start_at_different_samples(tmp_path):
+    path = write_recording(tmp_path / "run.rrd", _trials(), _results())  # onsets 80 and 100 in k01
+    assert _chunks(path, "/trials/k01/onset80/hand_force") and _chunks(
+        path, "/trials/k01/onset100/hand_force"
+    )
+    assert not _chunks(path, "/trials/k01/hand_force")

@@ -9,6 +9,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from armlab.viz._paths import save_png
+from armlab.viz._ticks import plain_log_ticks
 
 __all__ = ["plot_ci_window_sweep"]
 
@@ -49,6 +50,7 @@ def plot_ci_window_sweep(summary: dict, baseline: dict | None, path: Path) -> Pa
             if baseline is not None and key in baseline["longest"][model]:
                 ax_e.plot(t_ms[-1], baseline["longest"][model][key] * 100, "o", mfc="none", color=color)
     ax_e.set_yscale("log")
+    plain_log_ticks(ax_e.yaxis)
     ax_e.set_xlabel("T_obs (ms)")
     ax_e.set_ylabel("error vs intrinsic truth (%)")
     ax_e.legend(fontsize=8, ncol=2)

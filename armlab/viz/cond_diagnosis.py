@@ -17,6 +17,7 @@ from matplotlib.figure import Figure
 
 from armlab.errors import DataError
 from armlab.viz._paths import fresh_path, recording, save_png
+from armlab.viz._ticks import plain_log_ticks
 
 __all__ = ["cond_diagnosis_figures", "cond_diagnosis_recording"]
 
@@ -81,6 +82,7 @@ def cond_diagnosis_figures(
     ax.set_xlabel("window after onset (ms)")
     ax.set_ylabel("held-out gap / noise floor")
     ax.set_yscale("log")
+    plain_log_ticks(ax.yaxis)
     ax.legend(fontsize=8)
     fig.tight_layout()
     paths.append(save_png(fig, Path(out) / "diagnosis_windows.png"))

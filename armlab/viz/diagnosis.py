@@ -37,6 +37,7 @@ from matplotlib.figure import Figure
 
 from armlab.errors import DataError
 from armlab.viz._paths import fresh_path, recording, save_png
+from armlab.viz._ticks import plain_log_ticks
 
 __all__ = [
     "diagnosis_figures",
@@ -108,6 +109,7 @@ def _gap_figure(groups, key: str, span_key: str, unit: str, title: str, path: Pa
         floor = _pct([b["floor"] for b in slices])
         ax.hlines(floor, x - 0.45, x + 0.45, colors="k", lw=2, label="noise floor")
         ax.set_yscale("log")
+        plain_log_ticks(ax.yaxis)
         ax.set_xticks(x, [f"{b[span_key][0]:g}–{b[span_key][1]:g}" for b in slices])
         ax.set_xlabel(unit)
         ax.set_ylabel("held-out gap (% of measured power)")

@@ -24,6 +24,7 @@ from matplotlib.figure import Figure
 
 from armlab.errors import ConfigError, DataError
 from armlab.viz._paths import DPI, save_png
+from armlab.viz._ticks import plain_log_ticks
 
 __all__ = [
     "plot_window_sweep",
@@ -202,6 +203,7 @@ def plot_window_sweep(
         if panel == "cond":
             ax.semilogy(x_ms, _series(parts, "cond", ()), "ko-", ms=3.5, lw=1.2, label="cond(W)")
             ax.set_ylabel("cond(W)")
+            plain_log_ticks(ax.yaxis)
             ax.grid(True, which="both", alpha=0.3)
         elif panel in ("K", "D"):
             unit = "N·m/rad" if panel == "K" else "N·m·s/rad"
@@ -336,6 +338,7 @@ def plot_error_vs_window(results: Mapping[str, Any], path: str | Path) -> Path:
                 label="reduced model (ξ fixed)",
             )
         ax.set_ylabel(f"rel. error of {name} [-]")
+        plain_log_ticks(ax.yaxis)
         ax.grid(True, which="both", alpha=0.3)
     _threshold_lines(axes, results, None)
     for ax in axes:

@@ -16,6 +16,7 @@ from matplotlib.figure import Figure
 
 from armlab.errors import DataError
 from armlab.viz._paths import DPI, fresh_path, save_png
+from armlab.viz._ticks import plain_log_ticks
 
 __all__ = ["plot_joint_bode"]
 
@@ -41,6 +42,8 @@ def plot_joint_bode(series: Mapping[str, Mapping], path: str | Path) -> Path:
                 mag.semilogx(f, 20 * np.log10(np.abs(Zf)), color=colour, lw=1.4, label=label)
                 ph.semilogx(f, np.degrees(np.unwrap(np.angle(Zf))), color=colour, lw=1.4)
         mag.set_title(name)
+        plain_log_ticks(mag.xaxis)
+        plain_log_ticks(ph.xaxis)
         mag.grid(True, which="both", alpha=0.3)
         ph.grid(True, which="both", alpha=0.3)
         ph.set_xlabel("frequency (Hz)")

@@ -2,14 +2,18 @@
 
 Layout of the recording (entity paths):
 
-- ``trials/k{k:02d}/t{i:03d}/<channel>``: scalars of trial ``i`` (its row in the TrialSet) of
-  observation window ``k`` (``trial_meta['group']``), one series per axis, on the ``trial_time``
-  timeline (s, relative to the perturbation onset, so the onset is t = 0 in every trial). Only
-  ``pre_onset_s`` before the onset to the end of the record is logged.
-- ``trials/k../t../events``: text markers at the onset and at the end of the window's
-  observation interval (t = T_obs).
-- ``trials/k../t../pose/arm`` and ``pose/robot``: 3D line strips through the world positions of
-  shoulder, elbow, hand and of the robot's base and joint origins, decimated to ``max_3d_hz``.
+- ``trials/k{k:02d}/<channel>``: scalars of every trial of observation window ``k``
+  (``trial_meta['group']``), one series per trial and axis, named ``t{i:03d} <axis> [unit]`` (``i``
+  the trial's row in the TrialSet), on the ``trial_time`` timeline (s, relative to the
+  perturbation onset, so the onset is t = 0 in every trial). Only ``pre_onset_s`` before the onset
+  to the end of the record is logged. The trials of a window are one entity, logged in one call:
+  780 trials took ~4700 calls as one entity each, and 2 s. A window whose trials have several
+  onset samples gets one entity per onset, ``trials/k{k:02d}/onset{n}/<channel>``.
+- ``trials/k../events``: text markers at the onset (each trial's direction, T_k and role) and at
+  the end of the window's observation interval (t = T_obs).
+- ``trials/k../pose/arm`` and ``pose/robot``: 3D line strips through the world positions of
+  shoulder, elbow, hand and of the robot's base and joint origins, one strip per trial,
+  decimated to ``max_3d_hz``.
 - ``estimates/{full,reduced}/{cond,K11..K22,D11..D22,xi1..xi3,eig_Ks1,..}`` and
   ``truth/{K11..,D11..,xi1..}``: one value per window on the ``t_obs`` timeline (duration, s) and
   the ``window`` sequence timeline (k).
@@ -71,10 +75,28 @@ def _series_names(trials: TrialSet, ch: str) -> list[str]:
     return [f"{a} [{unit}]" if unit else a for a in axis[:n_axes]]
 
 
-def _trial_paths(trials: TrialSet) -> tuple[np.ndarray, list[str]]:
+def _groups(trials: TrialSet) -> np.ndarray:
+    """(n_trials,) window index k of every trial (``trial_meta['group']``, 0 if absent)."""
     n = trials.n_trials
-    group = np.asarray(trials.trial_meta.get("group", np.zeros(n, dtype=int))).astype(int)
-    return group, [f"trials/k{int(g):02d}/t{i:03d}" for i, g in enumerate(group)]
+    return np.asarray(trials.trial_meta.get("group", np.zeros(n, dtype=int))).astype(int)
+
+
+def _batch_path(k: int, onset: int, batches: Mapping[tuple[int, int], Sequence[int]]) -> str:
+    """Entity path of the trials of window ``k`` with onset sample ``onset``: ``trials/k{k:02d}``,
+    or ``trials/k{k:02d}/onset{onset}`` where the window's trials have several onsets."""
+    several = sum(1 for kk, _ in batches if kk == k) > 1
+    return f"trials/k{k:02d}" + (f"/onset{onset}" if several else "")
+
+
+def _onset_text(k: int, members: np.ndarray, meta: Mapping[str, np.ndarray]) -> str:
+    """The onset marker of one batch: the window and each trial's direction, T_k and role."""
+
+    def trial(i: int) -> str:
+        desc = [f"{name}={meta[name][i]}" for name in ("direction", "T_k_s") if name in meta]
+        val = " (validation)" if "validate" in meta and bool(meta["validate"][i]) else ""
+        return f"t{i:03d}" + (f" {', '.join(desc)}" if desc else "") + val
+
+    return f"onset, k={k}, {members.size} trials: " + "; ".join(trial(int(i)) for i in members)
 
 
 def _window_params(parts: Sequence[Mapping[str, Any]], with_xi: bool) -> dict[str, np.ndarray]:
@@ -116,32 +138,32 @@ def _truth_params(
 
 def _blueprint(
     rrb,
-    trial_paths: Sequence[str],
-    group: np.ndarray,
+    paths: Mapping[tuple[int, int], tuple[str, bool]],
     scalar_channels: Sequence[str],
-    pose_entities: Mapping[str, list[str]],
+    pose_names: Sequence[str],
     t_obs_by_k: Mapping[int, float],
     models: Sequence[str],
     truth_names: Sequence[str],
 ):
-    """Tabs: one per window (time series per channel, 3D poses, markers) and one of estimates."""
+    """Tabs: one per window (time series per channel, 3D poses, markers) and one of estimates.
+
+    ``paths``: (k, onset) -> (entity path of that batch of trials, whether it has 3D poses).
+    """
     tabs = []
-    for k in sorted(set(group.tolist())):
-        paths = [p for p, g in zip(trial_paths, group, strict=True) if g == k]
+    for k in sorted({key[0] for key in paths}):
+        bases = [paths[key] for key in paths if key[0] == k]
         series = [
             rrb.TimeSeriesView(
                 name=ch,
                 origin="/",
-                contents=[f"/{p}/{ch}" for p in paths],
+                contents=[f"/{b}/{ch}" for b, _ in bases],
                 plot_legend=rrb.PlotLegend(visible=False),
             )
             for ch in scalar_channels
         ]
-        poses = [e for p in paths for e in pose_entities.get(p, [])]
-        right = (
-            [rrb.Spatial3DView(name="poses", origin="/", contents=[f"/{e}" for e in poses])] if poses else []
-        )
-        right.append(rrb.TextLogView(name="markers", origin="/", contents=[f"/{p}/events" for p in paths]))
+        poses = [f"/{b}/pose/{name}" for b, posed in bases if posed for name in pose_names]
+        right = [rrb.Spatial3DView(name="poses", origin="/", contents=poses)] if poses else []
+        right.append(rrb.TextLogView(name="markers", origin="/", contents=[f"/{b}/events" for b, _ in bases]))
         t_obs = t_obs_by_k.get(k)
         label = f"k{k:02d}" + (f" · T_obs {1e3 * t_obs:.0f} ms" if t_obs is not None else "")
         tabs.append(
@@ -248,7 +270,7 @@ def write_recording(
 
     windows = list(results.get("windows") or [])
     t_obs_by_k = {int(w["k"]): float(w["t_obs_s"]) for w in windows if "k" in w and "t_obs_s" in w}
-    group, trial_paths = _trial_paths(trials)
+    group = _groups(trials)
     meta = {k: np.asarray(v) for k, v in trials.trial_meta.items()}
     fs = float(trials.fs_hz)
     n_samples = trials.n_samples
@@ -256,6 +278,10 @@ def write_recording(
     pre = int(round(pre_onset_s * fs))
     step_3d = max(1, int(round(fs / max_3d_hz)))
     step_scalar = 1 if max_scalar_hz is None else max(1, int(round(fs / max_scalar_hz)))
+    # the trials of one window that share an onset share a clock: they are logged together
+    batches: dict[tuple[int, int], list[int]] = {}
+    for i, (k, onset) in enumerate(zip(group.tolist(), onsets.tolist(), strict=True)):
+        batches.setdefault((k, onset), []).append(i)
 
     # Which trials get 3D poses: the first `poses_per_window` of each window, in trial order.
     with_pose = np.ones(trials.n_trials, dtype=bool)
@@ -265,49 +291,41 @@ def write_recording(
             idx = np.flatnonzero(group == g)
             rank[idx] = np.arange(idx.size)
         with_pose = rank < poses_per_window
-    pose_entities = {
-        tp: [f"{tp}/pose/{name}" for _, name, _, _ in poses]
-        for tp, wp in zip(trial_paths, with_pose, strict=True)
-        if wp and poses
-    }
 
     models = ["full"] + (
         ["reduced"] if windows and all(w.get("reduced") is not None for w in windows) else []
     )
     truth = _truth_params(results, windows, ground_truth) if windows else {}
 
-    bp = (
-        _blueprint(rrb, trial_paths, group, channels, pose_entities, t_obs_by_k, models, list(truth))
-        if blueprint
-        else None
-    )
-    # What every trial shares is converted to Arrow once, not once per trial: the series styles
-    # (names per channel), the trial clocks (one per distinct onset) and the poses' colours/radii.
-    styles = {ch: rr.SeriesLines(names=_series_names(trials, ch)) for ch in channels}
-    scalar_time: dict[int, tuple[np.ndarray, list]] = {}
-    pose_time: dict[int, tuple[np.ndarray, list]] = {}
-    pose_style: dict[tuple[str, int], Any] = {}
+    bp = None
+    if blueprint:
+        paths = {
+            key: (_batch_path(key[0], key[1], batches), bool(poses) and bool(with_pose[rows].any()))
+            for key, rows in batches.items()
+        }
+        bp = _blueprint(
+            rrb, paths, channels, [name for _, name, _, _ in poses], t_obs_by_k, models, list(truth)
+        )
     with recording(p, "armlab", bp) as rec:
-        for i, base in enumerate(trial_paths):
-            onset = int(onsets[i])
+        for (k, onset), rows_of in batches.items():
+            base = _batch_path(k, onset, batches)
+            members = np.asarray(rows_of)
             start = max(0, onset - pre)
-            if onset not in scalar_time:
-                rows = _onset_aligned(onset, start, n_samples, step_scalar)
-                scalar_time[onset] = (rows, [rr.TimeColumn(_TRIAL_TIMELINE, duration=(rows - onset) / fs)])
-            rows, time_col = scalar_time[onset]
+            rows = _onset_aligned(onset, start, n_samples, step_scalar)
+            time_col = [rr.TimeColumn(_TRIAL_TIMELINE, duration=(rows - onset) / fs)]
             for ch in channels:
-                x = trials.channels[ch][i, rows, :]
-                n_axes = x.shape[1]
-                rec.log(f"{base}/{ch}", styles[ch], static=True)
+                # (rows, trials, axes): each row holds every trial's axes, instance j = trial * n_axes + axis
+                x = np.ascontiguousarray(np.moveaxis(trials.channels[ch][members][:, rows, :], 1, 0))
+                names = [f"t{i:03d} {axis}" for i in members for axis in _series_names(trials, ch)]
+                rec.log(f"{base}/{ch}", rr.SeriesLines(names=names), static=True)
                 rec.send_columns(
                     f"{base}/{ch}",
                     indexes=time_col,
-                    columns=rr.Scalars.columns(scalars=_f32(x).ravel()).partition(np.full(rows.size, n_axes)),
+                    columns=rr.Scalars.columns(scalars=_f32(x).ravel()).partition(
+                        np.full(rows.size, x.shape[1] * x.shape[2])
+                    ),
                 )
-            k = int(group[i])
-            desc = [f"k={k}"] + [f"{name}={meta[name][i]}" for name in ("direction", "T_k_s") if name in meta]
-            val = " (validation trial)" if "validate" in meta and bool(meta["validate"][i]) else ""
-            texts, times = [f"onset: {', '.join(desc)}{val}"], [0.0]
+            texts, times = [_onset_text(k, members, meta)], [0.0]
             if k in t_obs_by_k:
                 texts.append(f"end of the observation window T_obs = {1e3 * t_obs_by_k[k]:.0f} ms")
                 times.append(t_obs_by_k[k])
@@ -316,25 +334,23 @@ def write_recording(
                 indexes=[rr.TimeColumn(_TRIAL_TIMELINE, duration=times)],
                 columns=rr.TextLog.columns(text=texts, level=["INFO"] * len(texts)),
             )
-            if base in pose_entities:
-                if onset not in pose_time:
-                    idx = _onset_aligned(onset, start, n_samples, step_3d)
-                    pose_time[onset] = (idx, [rr.TimeColumn(_TRIAL_TIMELINE, duration=(idx - onset) / fs)])
-                idx, idx_time = pose_time[onset]
+            posed = members[with_pose[members]]
+            if posed.size and poses:
+                idx = _onset_aligned(onset, start, n_samples, step_3d)
+                idx_time = [rr.TimeColumn(_TRIAL_TIMELINE, duration=(idx - onset) / fs)]
+                per_row = np.full(idx.size, posed.size)
                 for c, name, colour, radius in poses:
-                    if (c, idx.size) not in pose_style:
-                        pose_style[c, idx.size] = list(
-                            rr.LineStrips3D.columns(
-                                colors=np.tile(colour, (idx.size, 1)),
-                                radii=np.full(idx.size, radius, np.float32),
-                            )
-                        )
-                    # one (n_points, 3) strip per row: the strips go to rerun as one NumPy array
-                    pts = np.asarray(trials.channels[c][i, idx, :], dtype=np.float32).reshape(idx.size, -1, 3)
+                    # one (n_points, 3) strip per trial and row, rows after rows: (rows * trials, P, 3)
+                    pts = np.moveaxis(np.asarray(trials.channels[c][posed][:, idx, :], np.float32), 1, 0)
+                    strips = np.ascontiguousarray(pts).reshape(idx.size * posed.size, -1, 3)
                     rec.send_columns(
                         f"{base}/pose/{name}",
                         indexes=idx_time,
-                        columns=[*rr.LineStrips3D.columns(strips=pts), *pose_style[c, idx.size]],
+                        columns=rr.LineStrips3D.columns(
+                            strips=strips,
+                            colors=np.tile(colour, (strips.shape[0], 1)),
+                            radii=np.full(strips.shape[0], radius, np.float32),
+                        ).partition(per_row),
                     )
         if windows:
             w_idx = [
