@@ -107,7 +107,7 @@ def test_layout_matches_the_contract(tmp_path):
         ds = f["channels/robot_q"]
         assert ds.dtype == np.float64 and ds.shape == (N_TRIALS, N_SAMPLES, 7)
         assert ds.chunks == (1, N_SAMPLES, 7)
-        assert ds.compression == "gzip" and ds.compression_opts == 4 and ds.shuffle
+        assert ds.compression == "gzip" and ds.compression_opts == 1 and ds.shuffle
         assert ds.attrs["unit"] == "rad"
         assert f["onset_index"].shape == (N_TRIALS,)
         assert f["trial_meta/group"].shape == (N_TRIALS,)
