@@ -1,9 +1,10 @@
 """Vectorised forward kinematics of the robot: encoders -> cuff contact point and F/T frame.
 
 The paper computes the hand position from the robot's joint sensors by forward kinematics (IV-A,
-IV-C). MuJoCo's ``mj_kinematics`` does one configuration per call; for ~10^6 samples per run this
-module chains the robot's rigid transforms with NumPy over all samples at once, using the body
-offsets and joint axes read from the compiled model (so it stays consistent with the MJCF). The
+IV-C). MuJoCo's ``mj_kinematics`` does one configuration per call (with the whole scene); for
+~10^6 samples per run this module chains the robot's rigid transforms alone, compiled
+(:mod:`armlab.models._fk_kernel`), using the body offsets and joint axes read from the compiled
+model (so it stays consistent with the MJCF). The
 cuff is taken at its nominal (undeflected) geometry: a real lab does not measure cuff deflection.
 """
 
@@ -28,28 +29,16 @@ def _quat_to_mat(q: np.ndarray) -> np.ndarray:
     return m.reshape(3, 3)
 
 
-def _axis_rotation(axis: np.ndarray, angle: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
-    """(..., 3, 3) rotations about a fixed unit ``axis`` by ``angle`` (...,) rad (Rodrigues).
-
-    ``out`` (..., 3, 3), if given, receives the result. Entry by entry, I + sin(a) K + (1 - cos(a))
-    K² in that order of operations; an entry where K and K² are both zero is I's exactly
-    (0 + (±0) + (+0) = +0 for finite angles), so only the others are computed: 4-5 of 9 for the
-    robot's axes along a frame direction.
-    """
-    k = np.array([[0, -axis[2], axis[1]], [axis[2], 0, -axis[0]], [-axis[1], axis[0], 0]])
+def _cross_matrices(axes: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(7, 3, 3) K (the cross-product matrix of each unit joint axis), K², and where either is
+    non-zero: Rodrigues' rotation I + sin(a) K + (1 - cos(a)) K² is the identity's entry elsewhere
+    (0 + (±0) + (+0) = +0 for finite angles), so only 4-5 of 9 entries are computed for the
+    robot's axes along a frame direction."""
+    k = np.zeros((len(axes), 3, 3))
+    k[:, 0, 1], k[:, 0, 2], k[:, 1, 2] = -axes[:, 2], axes[:, 1], -axes[:, 0]
+    k[:, 1, 0], k[:, 2, 0], k[:, 2, 1] = axes[:, 2], -axes[:, 1], axes[:, 0]
     kk = k @ k
-    if out is None:
-        out = np.empty(np.shape(angle) + (3, 3))
-    s = np.sin(angle)
-    omc = 1 - np.cos(angle)
-    for r in range(3):
-        for c in range(3):
-            eye = 1.0 if r == c else 0.0
-            if k[r, c] == 0 and kk[r, c] == 0:
-                out[..., r, c] = eye
-            else:
-                out[..., r, c] = eye + s * k[r, c] + omc * kk[r, c]
-    return out
+    return k, kk, (k != 0) | (kk != 0)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -101,22 +90,34 @@ class RobotKinematics:
     def forward(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """World position of the cuff contact point and orientation of the F/T frame.
 
+        Compiled, one sample at a time (:mod:`armlab.models._fk_kernel`; numba is imported on
+        the first call).
+
         Args:
             q: (..., 7) rad robot joint angles.
 
         Returns:
             ((..., 3) m contact position, (..., 3, 3) F/T site rotation, columns = site axes).
         """
+        from armlab.models._fk_kernel import chain
+
         q = np.asarray(q, float)
         shape = q.shape[:-1]
-        # ~10^6 samples make every (..., 3, 3) product a 50 MB array: the chain writes into
-        # buffers reused by every link instead of allocating each product anew (same operations)
-        rot_buf, fixed, joint = (np.empty(shape + (3, 3)) for _ in range(3))
-        pos_buf, offset = np.empty(shape + (3,)), np.empty(shape + (3,))
-        rot = np.broadcast_to(self.base_rot, shape + (3, 3))
-        pos = np.broadcast_to(self.base_pos, shape + (3,))
-        for i in range(7):
-            pos = np.add(pos, np.matmul(rot, self.link_pos[i], out=offset), out=pos_buf)
-            np.matmul(rot, self.link_rot[i], out=fixed)
-            rot = np.matmul(fixed, _axis_rotation(self.axes[i], q[..., i], out=joint), out=rot_buf)
-        return pos + rot @ self.contact_pos, rot @ self.ft_rot
+        rows = np.ascontiguousarray(q.reshape(-1, 7))
+        contact, rot = np.empty((rows.shape[0], 3)), np.empty((rows.shape[0], 3, 3))
+        k, kk, used = _cross_matrices(self.axes)
+        chain(
+            self.base_pos,
+            self.base_rot,
+            self.link_pos,
+            self.link_rot,
+            k,
+            kk,
+            used,
+            self.contact_pos,
+            self.ft_rot,
+            rows,
+            contact,
+            rot,
+        )
+        return contact.reshape(shape + (3,)), rot.reshape(shape + (3, 3))
