@@ -1,6 +1,18 @@
 """Estimation of arm impedance from processed trial data."""
 
 from armlab.estimation.capstan_signals import CapstanSignals, capstan_signals, rotate_by
+from armlab.estimation.cartesian_identification import (
+    Exp1Result,
+    Exp2Result,
+    Exp3Result,
+    Exp4Result,
+    Exp5Result,
+    identify_exp1,
+    identify_exp2,
+    identify_exp3,
+    identify_exp4,
+    identify_exp5,
+)
 from armlab.estimation.cartesian_regressors import (
     full_quadratic_regressor,
     linear_axis_regressor,
@@ -208,4 +220,14 @@ __all__ = [
     "SqrtDampingFit",
     "cumulative_sqrt_damping_fit",
     "fit_sqrt_damping_field",
+    "Exp1Result",
+    "Exp2Result",
+    "Exp3Result",
+    "Exp4Result",
+    "Exp5Result",
+    "identify_exp1",
+    "identify_exp2",
+    "identify_exp3",
+    "identify_exp4",
+    "identify_exp5",
 ]
