@@ -142,10 +142,10 @@ def test_exp4_with_force_noise():
         experiment_timeline(4), THESIS_FIELD, noise_std_n=0.05, rng=np.random.default_rng(0)
     )
     r = identify_exp4(rec)
-    # spec check 6 with the thesis's estimator, seed 0: 1.18 % after 5, 0.044 % after 20 (max over the
-    # disc). Over seeds 0-9: after 2 sequences 12-39 % (so "converges by the second sequence" holds
-    # only without noise), after 5 <= 1.41 %, after 20 <= 0.052 %; the sqrt_damping fit: <= 1.54 %
-    # and <= 0.021 %.
+    # spec check 6 with the thesis's estimator, seed 0: 12.3 % after 2, 1.18 % after 5, 0.044 % after
+    # 20 (max over the disc). Over seeds 0-9: after 2 sequences 2.1-39 % (median 23 %), so "converges
+    # by the second sequence" holds only without noise; after 5 <= 1.41 %, after 20 <= 0.052 %. The
+    # sqrt_damping fit: <= 1.54 % and <= 0.021 %.
     assert r.field.max_pct[1] > 3.0
     assert r.field.max_pct[4] <= 3.0
     assert r.field.max_pct[19] <= 0.1
