@@ -13,6 +13,9 @@ from armlab.estimation import (
     disc_grid,
     field_error,
     fit_separable_polynomial,
+    identify_exp1,
+    identify_exp3,
+    identify_exp4,
     linear_coupled_regressor,
     ls_fit,
     polar_force,
@@ -139,6 +142,15 @@ def test_experiment_bad_input():
         THESIS_FIELD.scaled(0.0)
     with pytest.raises(ConfigError, match="sigma"):
         THESIS_FIELD.stiffness([0.95, 0.1], sigma=2.0)
+    rec2 = simulate_level_a(experiment_timeline(2), THESIS_FIELD)
+    with pytest.raises(ConfigError, match="linear, sqrt_damping"):
+        identify_exp4(rec2, method="quadratic")  # type: ignore[arg-type]
+    with pytest.raises(ConfigError, match="window_blocks"):
+        identify_exp4(rec2, method="sqrt_damping", window_blocks=3)
+    with pytest.raises(ConfigError, match="y = 0"):
+        identify_exp3(rec2)
+    with pytest.raises(ConfigError, match="single-axis"):
+        identify_exp1(rec2)
 
 
 def test_level_a_noise_is_seeded_and_has_its_level():

@@ -76,6 +76,7 @@ from armlab.estimation.levy import (
     levy_sweep,
 )
 from armlab.estimation.online_ls import (
+    RANK_RTOL,
     LSFit,
     OnlineLS,
     cumulative_ls,
@@ -230,4 +231,5 @@ __all__ = [
     "identify_exp3",
     "identify_exp4",
     "identify_exp5",
+    "RANK_RTOL",
 ]

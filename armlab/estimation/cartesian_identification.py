@@ -228,6 +228,10 @@ def identify_exp4(
     """
     if method not in ("linear", "sqrt_damping"):
         raise ConfigError(f"unknown Exp. 4 method {method!r}; valid: linear, sqrt_damping")
+    if window_blocks is not None and method != "linear":
+        raise ConfigError(
+            "window_blocks applies to method='linear' only (the sqrt_damping fit keeps all data)"
+        )
     q_h, q_p, qd_h, f, _, stop, _ = _logged(record)
     n_s = record.timeline.n_stops
     coef = np.full((n_s, 2, 6), np.nan)

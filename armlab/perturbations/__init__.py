@@ -23,6 +23,7 @@ from armlab.perturbations.ramp_waveforms import (
     TRAPEZOIDAL,
     TRIANGULAR,
     RampWaveform,
+    Shape,
     ramp_waveform,
 )
 from armlab.perturbations.reference_paths import (
@@ -73,4 +74,5 @@ __all__ = [
     "sinusoid_path",
     "spiral_path",
     "table_3_3_path",
+    "Shape",
 ]

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armlab.errors import ConfigError
-from armlab.perturbations.ramp_waveforms import RampWaveform, ramp_waveform
+from armlab.perturbations.ramp_waveforms import RampWaveform, Shape, ramp_waveform
 from armlab.perturbations.reference_paths import (
     MOTION_DURATION_S,
     ReferencePath,
@@ -193,7 +193,7 @@ def stop_timeline(
 def experiment_timeline(
     experiment: int,
     *,
-    shape: str = "triangular",
+    shape: Shape = "triangular",
     corner_s: float = 0.0,
     n_stops: int = 20,
     pause_s: float = 0.5,
@@ -218,7 +218,7 @@ def experiment_timeline(
     """
     if experiment not in EXPERIMENTS:
         raise ConfigError(f"unknown experiment {experiment!r}; valid: {', '.join(map(str, EXPERIMENTS))}")
-    waveform = ramp_waveform(shape, corner_s)  # type: ignore[arg-type]
+    waveform = ramp_waveform(shape, corner_s)
     st = stop_path_times(n_stops)
     seq = np.asarray(SEQUENCE_DIRECTIONS)
     if experiment == 1:

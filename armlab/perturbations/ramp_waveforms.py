@@ -23,6 +23,7 @@ import numpy as np
 from armlab.errors import ConfigError
 
 __all__ = [
+    "Shape",
     "RampWaveform",
     "TRIANGULAR",
     "TRAPEZOIDAL",
