@@ -200,6 +200,9 @@ class Exp4Result:
         field: the field error over the workspace after each stop.
         force_nrmse: (2,) final estimate's force prediction error on all logged data (RMS of the
             residual over RMS of the force).
+        damping_true: (s, 2) N·s/m, the model's δ√K at each stop.
+        sqrt_k_hat: (s, 2) N·s/m, ``δ√K̂`` of the final field estimate at each stop (the thesis's
+            substitute for the damping, §3.4.3; δ is the model's).
     """
 
     method: str
@@ -208,6 +211,19 @@ class Exp4Result:
     rank: np.ndarray
     field: FieldError
     force_nrmse: np.ndarray
+    damping_true: np.ndarray
+    sqrt_k_hat: np.ndarray
+
+    @property
+    def sqrt_k_error_pct(self) -> np.ndarray:
+        """(s, 2) % of ``δ√K̂`` from the model damping at each stop (§3.4.3's substitute)."""
+        return relative_error_pct(self.damping_true, self.sqrt_k_hat)
+
+    @property
+    def d_hat_error_pct(self) -> np.ndarray:
+        """(s, 2) % of the final linear ``D̂_xx, D̂_yy`` (constant) from the model damping at each stop."""
+        d = np.diagonal(self.damping[-1])
+        return relative_error_pct(self.damping_true, np.broadcast_to(d, self.damping_true.shape))
 
 
 def identify_exp4(
@@ -258,7 +274,11 @@ def identify_exp4(
             pred = k_at * q_p[:, a] + last.delta * np.sqrt(np.maximum(k_at, 0.0)) * qd_h[:, a]
         nrmse[a] = np.sqrt(np.mean((pred - f[:, a]) ** 2) / np.mean(f[:, a] ** 2))
     pts = disc_grid() if grid is None else np.asarray(grid, dtype=float)
+    stops = record.timeline.stop_position
+    k_final = np.einsum("sj,aj->sa", quadratic_basis(stops), coef[-1])
     return Exp4Result(
+        damping_true=record.field.damping(stops, record.sigma),
+        sqrt_k_hat=np.asarray(record.field.delta) * np.sqrt(np.maximum(k_final, 0.0)),
         method=method,
         coefficients=coef,
         damping=damp,
