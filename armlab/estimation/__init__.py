@@ -1,6 +1,26 @@
 """Estimation of arm impedance from processed trial data."""
 
 from armlab.estimation.capstan_signals import CapstanSignals, capstan_signals, rotate_by
+from armlab.estimation.cartesian_identification import (
+    Exp1Result,
+    Exp2Result,
+    Exp3Result,
+    Exp4Result,
+    Exp5Result,
+    identify_exp1,
+    identify_exp2,
+    identify_exp3,
+    identify_exp4,
+    identify_exp5,
+)
+from armlab.estimation.cartesian_regressors import (
+    full_quadratic_regressor,
+    linear_axis_regressor,
+    linear_coupled_regressor,
+    linear_full_regressor,
+    quadratic_field_regressor,
+    quadratic_x_regressor,
+)
 from armlab.estimation.criteria import (
     CriteriaConfig,
     asymmetry,
@@ -11,6 +31,12 @@ from armlab.estimation.criteria import (
     quasi_constant_flags,
     relative_error,
     symmetric_part,
+)
+from armlab.estimation.field_scoring import (
+    FieldError,
+    disc_grid,
+    field_error,
+    relative_error_pct,
 )
 from armlab.estimation.five_element_fit import (
     FractionalFiveElementSweep,
@@ -49,12 +75,36 @@ from armlab.estimation.levy import (
     levy_fit,
     levy_sweep,
 )
+from armlab.estimation.online_ls import (
+    RANK_RTOL,
+    LSFit,
+    OnlineLS,
+    cumulative_ls,
+    ls_fit,
+    per_block_ls,
+)
+from armlab.estimation.order_selection import (
+    PolyFit,
+    fit_separable_polynomial,
+    parameter_count,
+    select_order,
+)
+from armlab.estimation.polar import (
+    PolarSignals,
+    polar_force,
+    polar_signals,
+    to_polar,
+)
 from armlab.estimation.processing import (
     JointSignals,
     ProcessingConfig,
     differentiate,
     joint_signals,
     lowpass_zero_phase,
+)
+from armlab.estimation.recursive_ls import (
+    RLSResult,
+    recursive_ls,
 )
 from armlab.estimation.smoothing import (
     SmoothingSpec,
@@ -64,6 +114,11 @@ from armlab.estimation.smoothing import (
     smooth_and_differentiate,
 )
 from armlab.estimation.smoothing import differentiate as sg_differentiate
+from armlab.estimation.sqrt_damping_fit import (
+    SqrtDampingFit,
+    cumulative_sqrt_damping_fit,
+    fit_sqrt_damping_field,
+)
 from armlab.estimation.virtual_force import (
     ArmFit,
     FixtureFit,
@@ -138,4 +193,43 @@ __all__ = [
     "table_vi",
     "vaf",
     "virtual_force",
+    "full_quadratic_regressor",
+    "linear_axis_regressor",
+    "linear_coupled_regressor",
+    "linear_full_regressor",
+    "quadratic_field_regressor",
+    "quadratic_x_regressor",
+    "FieldError",
+    "disc_grid",
+    "field_error",
+    "relative_error_pct",
+    "LSFit",
+    "OnlineLS",
+    "cumulative_ls",
+    "ls_fit",
+    "per_block_ls",
+    "PolyFit",
+    "fit_separable_polynomial",
+    "parameter_count",
+    "select_order",
+    "PolarSignals",
+    "polar_force",
+    "polar_signals",
+    "to_polar",
+    "RLSResult",
+    "recursive_ls",
+    "SqrtDampingFit",
+    "cumulative_sqrt_damping_fit",
+    "fit_sqrt_damping_field",
+    "Exp1Result",
+    "Exp2Result",
+    "Exp3Result",
+    "Exp4Result",
+    "Exp5Result",
+    "identify_exp1",
+    "identify_exp2",
+    "identify_exp3",
+    "identify_exp4",
+    "identify_exp5",
+    "RANK_RTOL",
 ]

@@ -3,8 +3,20 @@
 from armlab.models.arm_endpoint import EndpointTruth, endpoint_truth, relaxed_activation
 from armlab.models.capstan_robot import TABLE_VI_ALPHA, CapstanDynamics, CapstanParameters
 from armlab.models.capstan_scene import LOADS, CapstanScene, build_capstan_scene
+from armlab.models.cartesian_field import (
+    QUADRATIC_TERMS,
+    THESIS_FIELD,
+    QuadraticImpedanceField,
+    quadratic_basis,
+)
 from armlab.models.direct_drive_scene import ELBOW_MUSCLES, DirectDriveScene, build_direct_drive_scene
 from armlab.models.elbow_truth import ElbowTruth, elbow_truth
+from armlab.models.frame_change import (
+    evaluate_matrix_field,
+    matrix_field_in_new_frame,
+    polynomial_in_new_frame,
+    rotation,
+)
 from armlab.models.ground_truth import (
     GroundTruth,
     base_inertial_parameters,
@@ -104,4 +116,12 @@ __all__ = [
     "five_element_from_tf",
     "s_power",
     "third_order_tf",
+    "QUADRATIC_TERMS",
+    "THESIS_FIELD",
+    "QuadraticImpedanceField",
+    "quadratic_basis",
+    "evaluate_matrix_field",
+    "matrix_field_in_new_frame",
+    "polynomial_in_new_frame",
+    "rotation",
 ]

@@ -1,5 +1,13 @@
 """Perturbation waveforms applied by the robot to the arm."""
 
+from armlab.perturbations.cartesian_timeline import (
+    EXPERIMENTS,
+    SEQUENCE_DIRECTIONS,
+    StopTimeline,
+    experiment_timeline,
+    stop_path_times,
+    stop_timeline,
+)
 from armlab.perturbations.multisine import ForceScenario, load_force_scenario, multisine
 from armlab.perturbations.prbs import prbs_position
 from armlab.perturbations.quintic import (
@@ -10,6 +18,25 @@ from armlab.perturbations.quintic import (
     polynomial_coefficients,
     quintic_profile,
     window_durations,
+)
+from armlab.perturbations.ramp_waveforms import (
+    TRAPEZOIDAL,
+    TRIANGULAR,
+    RampWaveform,
+    Shape,
+    ramp_waveform,
+)
+from armlab.perturbations.reference_paths import (
+    CIRCLE_CENTRE_M,
+    CIRCLE_RADIUS_M,
+    MOTION_DURATION_S,
+    TABLE_3_3,
+    ReferencePath,
+    circle_path,
+    golden_omega,
+    sinusoid_path,
+    spiral_path,
+    table_3_3_path,
 )
 from armlab.perturbations.sum_of_sines import SumOfSines, sum_of_sines
 
@@ -27,4 +54,25 @@ __all__ = [
     "window_durations",
     "SumOfSines",
     "sum_of_sines",
+    "EXPERIMENTS",
+    "SEQUENCE_DIRECTIONS",
+    "StopTimeline",
+    "experiment_timeline",
+    "stop_path_times",
+    "stop_timeline",
+    "TRAPEZOIDAL",
+    "TRIANGULAR",
+    "RampWaveform",
+    "ramp_waveform",
+    "CIRCLE_CENTRE_M",
+    "CIRCLE_RADIUS_M",
+    "MOTION_DURATION_S",
+    "TABLE_3_3",
+    "ReferencePath",
+    "circle_path",
+    "golden_omega",
+    "sinusoid_path",
+    "spiral_path",
+    "table_3_3_path",
+    "Shape",
 ]

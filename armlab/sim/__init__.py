@@ -2,6 +2,10 @@
 trials stepped from Python on threads."""
 
 from armlab.sim.capstan_lab import CLEAN_UNITS, simulate_capstan
+from armlab.sim.cartesian_level_a import (
+    CartesianRecord,
+    simulate_level_a,
+)
 from armlab.sim.force_control import ForceTrial, simulate_force_trial
 from armlab.sim.hold import (
     HoldState,
@@ -43,4 +47,6 @@ __all__ = [
     "CLEAN_UNITS",
     "simulate_capstan",
     "run_trials",
+    "CartesianRecord",
+    "simulate_level_a",
 ]
