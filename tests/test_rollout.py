@@ -155,3 +155,15 @@ def test_a_batch_of_no_steps_records_no_samples(lab):
         lab.scene, lab.hold.state, np.zeros((2, 0, 7)), lab.hold.activation, ReflexConfig(), substeps=2
     )
     assert res.sensordata.shape == (2, 0, lab.scene.model.nsensordata) and res.qpos.shape[:2] == (2, 0)
+
+
+def test_trials_sharing_a_path_read_it_by_row(lab):
+    # target_rows: trials follow rows of a table of paths (the lab's (direction, T_k) pairs)
+    paths = _ramped_targets(lab)
+    rows = np.array([1, 0, 1])
+    args = (lab.scene, lab.hold.state)
+    by_row = simulate(*args, paths, lab.hold.activation, ReflexConfig(), substeps=SUBSTEPS, target_rows=rows)
+    copied = simulate(*args, paths[rows], lab.hold.activation, ReflexConfig(), substeps=SUBSTEPS)
+    assert by_row.sensordata.shape[0] == 3
+    assert_array_equal(by_row.sensordata, copied.sensordata)
+    assert_array_equal(by_row.qpos, copied.qpos)

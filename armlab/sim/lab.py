@@ -123,22 +123,11 @@ class LabRecording:
     hold: HoldState
 
 
-def robot_targets(
+def _target_paths(
     scene: Scene, hold: HoldState, q0: np.ndarray, plan: TrialPlan, directions: np.ndarray, t_rel: np.ndarray
-) -> np.ndarray:
-    """Robot joint targets of every trial at every physics step.
-
-    The hand path of each direction, x(s) = f(q0 + s dq_f) for s in [0, 1], is solved by IK once
-    on :data:`PATH_POINTS` points and spline-interpolated in s; every trial then evaluates it at
-    s(t) = quintic((t - t_onset) / T_k) (eq. 16), so durations share the path. Trials of the same
-    direction and T_k have the same targets: each such pair is evaluated once and copied.
-
-    Args:
-        t_rel: (n_steps,) s, time of each physics step relative to the onset.
-
-    Returns:
-        (n_trials, n_steps, 7) rad.
-    """
+) -> tuple[np.ndarray, np.ndarray]:
+    """The robot's joint-target paths of :func:`robot_targets` once per (direction, T_k) pair:
+    ((n_pairs, n_steps, 7) rad, (n_trials,) the pair of each trial)."""
     s_grid = np.linspace(0.0, 1.0, PATH_POINTS)
     splines = []
     for dq_f in directions:
@@ -153,7 +142,28 @@ def robot_targets(
     for j, (direction, t_k) in enumerate(pairs):
         s, _, _ = quintic_profile(t_rel, float(t_k))
         table[j] = splines[int(direction)](s)
-    return table[np.asarray(which).reshape(-1)]
+    return table, np.asarray(which).reshape(-1)
+
+
+def robot_targets(
+    scene: Scene, hold: HoldState, q0: np.ndarray, plan: TrialPlan, directions: np.ndarray, t_rel: np.ndarray
+) -> np.ndarray:
+    """Robot joint targets of every trial at every physics step.
+
+    The hand path of each direction, x(s) = f(q0 + s dq_f) for s in [0, 1], is solved by IK once
+    on :data:`PATH_POINTS` points and spline-interpolated in s; every trial then evaluates it at
+    s(t) = quintic((t - t_onset) / T_k) (eq. 16), so durations share the path. Trials of the same
+    direction and T_k have the same targets: each such pair is evaluated once (the lab's
+    simulation reads them per pair; this function copies them out per trial).
+
+    Args:
+        t_rel: (n_steps,) s, time of each physics step relative to the onset.
+
+    Returns:
+        (n_trials, n_steps, 7) rad.
+    """
+    table, which = _target_paths(scene, hold, q0, plan, directions, t_rel)
+    return table[which]
 
 
 def record_trials(
@@ -211,7 +221,7 @@ def record_trials(
         # step clock; the perturbation starts at sample `onset`, so at (onset + 1) / fs
         t_rel = (np.arange(n_steps) + 1) * dt - (onset + 1) / fs
         q0 = np.asarray(cfg.arm.q0, float)
-        targets = robot_targets(scene, hold, q0, plan, scenario.directions_rad, t_rel)
+        paths, path_of = _target_paths(scene, hold, q0, plan, scenario.directions_rad, t_rel)
         muscle_base = hold.activation
         if active:
             muscle_base = commands(hold.activation, drawing.result(), n_steps, substeps)
@@ -224,7 +234,9 @@ def record_trials(
         ),
         hint=_UNSTABLE_HINT,
     )
-    sim = simulate(scene, hold.state, targets, muscle_base, cfg.reflex, substeps=substeps, who=who)
+    sim = simulate(
+        scene, hold.state, paths, muscle_base, cfg.reflex, substeps=substeps, who=who, target_rows=path_of
+    )
 
     sd = sim.sensordata
     check_bound(

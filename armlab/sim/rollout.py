@@ -131,13 +131,15 @@ def simulate(
     substeps: int,
     nthread: int | None = None,
     who: TrialLabels | None = None,
+    target_rows: np.ndarray | None = None,
 ) -> SimResult:
     """Simulate a batch of trials from one settled state.
 
     Args:
         scene: the composed scene.
         initial_state: (nstate,) full-physics state every trial starts from.
-        robot_targets: (n_trials, n_steps, 7) rad robot joint targets at every physics step.
+        robot_targets: (n_trials, n_steps, 7) rad robot joint targets at every physics step, or
+            (n_paths, n_steps, 7) with ``target_rows``.
         muscle_base: (6,) activation commands without reflex, or (n_trials, n_steps, 6) per trial
             and physics step (a subject whose activation fluctuates, see
             :mod:`armlab.sim.subject`).
@@ -145,6 +147,9 @@ def simulate(
         substeps: physics steps per recorded sample.
         nthread: rollout threads (default: all cores).
         who: the trials, named in a :class:`SimulationError` (default: "row <i> of the batch").
+        target_rows: (n_trials,) the row of ``robot_targets`` each trial follows (trials sharing
+            a path share a row: each chunk gathers its targets, no (n_trials, n_steps, 7) copy);
+            None: row i for trial i.
 
     Returns:
         The clean signals, sampled every ``substeps`` steps.
@@ -153,7 +158,13 @@ def simulate(
         SimulationError: a trial diverged (MuJoCo warned or reset its state; :mod:`.stability`).
     """
     model = scene.model
-    n_trials, n_steps, _ = robot_targets.shape
+    _, n_steps, _ = robot_targets.shape
+    if target_rows is None:
+        n_trials = robot_targets.shape[0]
+        target_rows = slice(None)
+    else:
+        target_rows = np.asarray(target_rows)
+        n_trials = target_rows.size
     muscle_base = np.asarray(muscle_base, float)
     per_step = muscle_base.ndim == 3
     if per_step and muscle_base.shape != (n_trials, n_steps, len(MUSCLES)):
@@ -212,7 +223,7 @@ def simulate(
     def robot_ctrl(j: int) -> None:  # the robot's part of chunk j's controls (known in advance)
         c0 = starts[j]
         c1 = min(n_steps, c0 + chunk)
-        bufs.get(c1 - c0, j % 2)[0][:, :, scene.robot_act] = robot_targets[:, c0:c1]
+        bufs.get(c1 - c0, j % 2)[0][:, :, scene.robot_act] = robot_targets[target_rows, c0:c1]
 
     def keep(c0: int, c1: int, state_in, states, sd, u, warned) -> None:
         """Check chunk [c0, c1) and keep its samples (while the next chunk steps)."""
