@@ -42,7 +42,9 @@ XI_RED_NAMES = ("m_total", "c_x", "c_y", "u_x", "u_y", "u_z", "s_x", "s_y", "s_z
 def _check_act(arm: Arm5Dof, act: np.ndarray) -> np.ndarray:
     act = np.asarray(act, dtype=float)
     if act.shape[-1:] != (len(arm.muscle_act),):
-        raise DataError(f"act must have shape (..., {len(arm.muscle_act)}) (one activation per muscle), got {act.shape}")
+        raise DataError(
+            f"act must have shape (..., {len(arm.muscle_act)}) (one activation per muscle), got {act.shape}"
+        )
     return act
 
 
@@ -53,7 +55,9 @@ def analytic_stiffness(arm: Arm5Dof, act: np.ndarray) -> np.ndarray:
         act: (..., 12) activations in ``ARM5_MUSCLES`` order.
     """
     w = _check_act(arm, act) * arm.muscle_stiffness
-    return np.einsum("...i,ij,ik->...jk", w, arm.moment_arms, arm.moment_arms) + np.diag(arm.passive_stiffness)
+    return np.einsum("...i,ij,ik->...jk", w, arm.moment_arms, arm.moment_arms) + np.diag(
+        arm.passive_stiffness
+    )
 
 
 def analytic_damping(arm: Arm5Dof, act: np.ndarray) -> np.ndarray:
@@ -144,7 +148,9 @@ def inertial_truth(arm: Arm5Dof) -> InertialTruth:
     c = s_fix + (m_u + m_f) * (kin.shoulder - p_s)
     u = s_u + m_f * kin.elbow_offset
     xi = np.concatenate([[m_fix + m_u + m_f], c[:2], u, s_f])
-    return InertialTruth(xi_red=xi, masses=np.array([m_fix, m_u, m_f]), first_moments=np.stack([s_fix, s_u, s_f]))
+    return InertialTruth(
+        xi_red=xi, masses=np.array([m_fix, m_u, m_f]), first_moments=np.stack([s_fix, s_u, s_f])
+    )
 
 
 def _in_subtree(m: mujoco.MjModel, body: int, root: int) -> bool:

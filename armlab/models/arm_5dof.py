@@ -133,7 +133,9 @@ def limb_kinematics(arm: Arm5Dof) -> LimbKinematics:
     joints = m.dof_jntid[arm.dof]
     upper, forearm = int(m.jnt_bodyid[joints[0]]), int(m.jnt_bodyid[joints[3]])
     if any(m.jnt_bodyid[j] != upper for j in joints[:3]) or m.jnt_bodyid[joints[4]] != forearm:
-        raise ModelError("arm_5dof: the three shoulder hinges must share one body, elbow and pronation another")
+        raise ModelError(
+            "arm_5dof: the three shoulder hinges must share one body, elbow and pronation another"
+        )
     if np.any(m.jnt_pos[joints] != 0.0):
         raise ModelError("arm_5dof: the hinges must sit at their body's origin (intersecting axes)")
     wrist = arm.sites["wrist"]

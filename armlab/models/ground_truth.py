@@ -1,8 +1,8 @@
 """Ground truth of the simulated arm, computed from the compiled model (never from the config).
 
-- Intrinsic joint stiffness K and damping D (n x n, 2 x 2 for the planar arm) at the operating point: central finite
-  differences of the arm's actuator + passive joint forces with respect to the arm's joint
-  positions and velocities, with muscle activations frozen (``mj_forward`` does not integrate
+- Intrinsic joint stiffness K and damping D (n x n; 2 x 2 for the planar arm) at the operating
+  point: central finite differences of the arm's actuator + passive joint forces with respect to
+  the arm's joint positions and velocities, with muscle activations frozen (``mj_forward`` does not integrate
   ``act``). Reflexes are excluded by construction: they act through activation.
 - Base inertial parameters xi of eq. (13) of the conditioning paper from the body inertias of
   the arm and the bodies welded to it (the cuff shell, with its own inertia), plus, for a rigid

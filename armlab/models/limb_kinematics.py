@@ -29,7 +29,7 @@ def axis_rotation(axis: np.ndarray, angle: np.ndarray) -> np.ndarray:
     a = np.asarray(axis, dtype=float)
     t = np.asarray(angle, dtype=float)[..., None, None]
     k = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
-    return np.eye(3) + np.sin(t) * k + (1.0 - np.cos(t)) * (k @ k)
+    return np.outer(a, a) + np.cos(t) * (np.eye(3) - np.outer(a, a)) + np.sin(t) * k
 
 
 @dataclass(frozen=True)
@@ -78,11 +78,18 @@ class LimbKinematics:
     wrist_rot0: np.ndarray
     axes: np.ndarray
 
-    def with_centres(self, shoulder: np.ndarray, elbow_offset: np.ndarray) -> LimbKinematics:
-        """The same chain with a shoulder centre (3,) m (world) and elbow offset (3,) m (upper-arm
-        frame) replaced, e.g. by the joint-centre estimates of Eqs. (7)-(9)."""
+    def with_centres(
+        self, shoulder: np.ndarray, elbow_offset: np.ndarray, wrist_offset: np.ndarray | None = None
+    ) -> LimbKinematics:
+        """The same chain with the shoulder centre (3,) m (world), the elbow offset (3,) m
+        (upper-arm frame) and optionally the wrist offset (3,) m (forearm frame) replaced, e.g. by
+        the joint-centre estimates of Eqs. (7)-(9)."""
+        wrist = self.wrist_offset if wrist_offset is None else wrist_offset
         return replace(
-            self, shoulder=np.asarray(shoulder, float).copy(), elbow_offset=np.asarray(elbow_offset, float).copy()
+            self,
+            shoulder=np.asarray(shoulder, float).copy(),
+            elbow_offset=np.asarray(elbow_offset, float).copy(),
+            wrist_offset=np.asarray(wrist, float).copy(),
         )
 
     def pose(self, q: np.ndarray) -> LimbPose:
@@ -99,7 +106,9 @@ class LimbKinematics:
         elbow = self.shoulder + upper @ self.elbow_offset
         wrist = elbow + forearm @ self.wrist_offset
         frames = (self.base_rot, r1, r2, f0, f0 @ rots[3])
-        axes = np.stack([np.broadcast_to(f @ a, elbow.shape) for f, a in zip(frames, self.axes)], axis=-2)
+        axes = np.stack(
+            [np.broadcast_to(f @ a, elbow.shape) for f, a in zip(frames, self.axes, strict=True)], axis=-2
+        )
         sh = np.broadcast_to(self.shoulder, elbow.shape)
         origins = np.stack([sh, sh, sh, elbow, elbow], axis=-2)
         return LimbPose(
