@@ -87,12 +87,15 @@ def inverse_kinematics(
         kin: the kinematic chain (e.g. ``limb_kinematics(arm)`` or its calibrated version).
         rot_d: (N, 3, 3) measured wrist orientations (world).
         pos_d: (N, 3) m measured wrist positions (world).
-        q_init: (5,) or (N, 5) rad starting guess (e.g. the default posture or the previous sample).
+        q_init: (5,) or (N, 5) rad starting guess: start near the solution (the previous sample, the
+            commanded configuration); three intersecting shoulder hinges have a second branch
+            (q1 + pi, pi - q2, q3 + pi) with the same wrist frame, which a far start can reach.
         tol: rad, stop when every sample's step is below it.
         max_iter: iteration budget.
 
     Returns:
-        :class:`IKResult` (``nfev``: the iterations run).
+        :class:`IKResult` (``nfev``: the iterations run); each angle is the 2 pi-equivalent nearest
+        ``q_init``.
 
     Raises:
         DataError: on mismatched shapes or non-finite input.
@@ -131,4 +134,7 @@ def inverse_kinematics(
             f"inverse kinematics did not converge in {max_iter} iterations "
             f"(worst ||T T_d^-1 - I||_F = {np.sqrt(cost.max()):.3g}); check the chain and the start posture"
         )
+    # hinges are 2 pi periodic: report the equivalent angle nearest the start
+    start = np.broadcast_to(np.asarray(q_init, dtype=float), (n, 5))
+    q = start + (q - start + np.pi) % (2.0 * np.pi) - np.pi
     return IKResult(q=q, J_limb=kin.jacobian(q), cost=np.sqrt(cost), nfev=it)
