@@ -21,6 +21,13 @@ from armlab.models import gravity_stiffness, gravity_torque, inertial_truth, lim
 from armlab.sensors.channel import ChannelSpec, apply_channel
 
 ARM = load_arm_5dof()
+
+
+def _base_wrench(data: mujoco.MjData) -> np.ndarray:
+    """(6,) the base F/T reading (f N, n N m)."""
+    return np.r_[data.sensordata[ARM.sensors["base_force"]], data.sensordata[ARM.sensors["base_torque"]]]
+
+
 KIN = limb_kinematics(ARM)
 TRUTH = inertial_truth(ARM)
 FT_RATE_HZ = 2000.0  # paper Sec. 3: base JR3 at 2 kHz
@@ -44,7 +51,7 @@ def _held_wrench(q: np.ndarray) -> np.ndarray:
         data = ARM.data_at(qi)
         data.qacc[:] = 0.0
         mujoco.mj_inverse(ARM.model, data)
-        out[i] = np.r_[data.sensordata[ARM.sensors["base_force"]], data.sensordata[ARM.sensors["base_torque"]]]
+        out[i] = _base_wrench(data)
     return out
 
 
@@ -57,9 +64,11 @@ def test_ideal_data_recover_xi_red():
     assert np.all(np.abs(fit.xi_red - TRUTH.xi_red) <= tol)
     assert_allclose(fit.xi_red, TRUTH.xi_red, atol=1e-9)
     held_out = _configurations(10, 32)
-    assert_allclose(gravity_torque_from_fit(KIN, fit.xi_red, held_out), gravity_torque(ARM, held_out), atol=1e-9)
+    g_fit = gravity_torque_from_fit(KIN, fit.xi_red, held_out)
+    assert_allclose(g_fit, gravity_torque(ARM, held_out), atol=1e-9)
     # dG/dq from the fit equals MuJoCo's (finite differences of both: 1e-6 N m/rad)
-    assert_allclose(gravity_stiffness_from_fit(KIN, fit.xi_red, ARM.q0), gravity_stiffness(ARM, ARM.q0), atol=1e-6)
+    dg_fit = gravity_stiffness_from_fit(KIN, fit.xi_red, ARM.q0)
+    assert_allclose(dg_fit, gravity_stiffness(ARM, ARM.q0), atol=1e-6)
 
 
 def test_realistic_base_sensor_and_markers_predict_gravity_within_0_1_nm():

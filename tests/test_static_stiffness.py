@@ -19,13 +19,19 @@ from armlab.estimation import (
 )
 from armlab.models import (
     gravity_stiffness,
-    inertial_truth,
     limb_kinematics,
     load_arm_5dof,
     stiffness_fd,
 )
 
 ARM = load_arm_5dof()
+
+
+def _base_wrench(data: mujoco.MjData) -> np.ndarray:
+    """(6,) the base F/T reading (f N, n N m)."""
+    return np.r_[data.sensordata[ARM.sensors["base_force"]], data.sensordata[ARM.sensors["base_torque"]]]
+
+
 KIN = limb_kinematics(ARM)
 AMPLITUDE_RAD = 0.08  # paper Sec. 3: perturbation amplitude ~0.08 rad
 N_DISTURBANCES = 50  # paper Sec. 4.1: 50 disturbances per K_q
@@ -57,7 +63,8 @@ def _disturbances(seed: int, act: np.ndarray):
     for q in (q_pre, q_post):
         tau = _held_external_torque(q, act)
         jac = KIN.jacobian(q)
-        wrench = np.einsum("nij,nj->ni", np.linalg.pinv(np.swapaxes(jac, 1, 2)), tau)  # minimum-norm wrist wrench
+        # the minimum-norm wrist wrench that gives tau
+        wrench = np.einsum("nij,nj->ni", np.linalg.pinv(np.swapaxes(jac, 1, 2)), tau)
         taus.append(external_joint_torque(jac, wrench))
     return q_pre, q_post, taus[0], taus[1]
 
@@ -69,7 +76,7 @@ def _xi_red() -> np.ndarray:
         data = ARM.data_at(qi)
         data.qacc[:] = 0.0
         mujoco.mj_inverse(ARM.model, data)
-        wrench[i] = np.r_[data.sensordata[ARM.sensors["base_force"]], data.sensordata[ARM.sensors["base_torque"]]]
+        wrench[i] = _base_wrench(data)
     return static_inertial_regression(KIN, q, wrench).xi_red
 
 
@@ -98,9 +105,8 @@ def test_ideal_data_recover_the_true_stiffness(seed):
 def test_ignoring_gravity_shifts_the_estimate_by_dg_dq():
     act = np.random.default_rng(110).uniform(0.05, 0.3, 12)
     q_pre, q_post, t_pre, t_post = _disturbances(3, act)
-    with_g = static_stiffness(
-        q_pre, q_post, t_pre, t_post, gravity_torque_from_fit(KIN, XI, q_pre), gravity_torque_from_fit(KIN, XI, q_post)
-    )
+    g_pre, g_post = gravity_torque_from_fit(KIN, XI, q_pre), gravity_torque_from_fit(KIN, XI, q_post)
+    with_g = static_stiffness(q_pre, q_post, t_pre, t_post, g_pre, g_post)
     without = static_stiffness(q_pre, q_post, t_pre, t_post)
     assert not without.gravity_compensated
     dG = gravity_stiffness(ARM, ARM.q0)
