@@ -100,6 +100,16 @@ def test_finite_difference_stiffness_equals_analytic_sum(seed):
     assert_allclose(stiffness_fd(ARM, ARM.q0, act)[0], K_a, atol=1e-7)
 
 
+def test_every_muscle_pulls_over_the_papers_perturbations():
+    """T0 = 300 N per unit activation keeps every tension positive over +-0.08 rad (paper Sec. 3)
+    along each of the 10 directions from q0 (models/arm_5dof/README.md)."""
+    act = np.full(len(ARM5_MUSCLES), 0.2)
+    for dq in np.vstack([np.eye(5), -np.eye(5)]) * 0.08:
+        data = ARM.data_at(ARM.q0 + dq, act)
+        # a pulling muscle has a negative actuator force; at least 0.2 * (300 - 120) N here
+        assert np.all(data.actuator_force[ARM.muscle_act] < -0.2 * 150.0)
+
+
 def test_truth_refuses_wrong_activation_shape():
     with pytest.raises(DataError, match="one activation per muscle"):
         analytic_stiffness(ARM, np.ones(8))
