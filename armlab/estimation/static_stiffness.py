@@ -30,6 +30,8 @@ class StaticStiffness:
 
     Attributes:
         K_ls: (n, n) N·m/rad, ordinary least squares of A X = B (X transposed back; not symmetric).
+        K_ls_std: (n, n) N·m/rad, standard errors of K_ls's entries (Gauss-Markov: each torque
+            component's residual variance times the diagonal of (A^T A)^-1).
         K: (n, n) N·m/rad, the SPD solution of the area criterion (Eqs. (16)-(17)).
         spd: the full :class:`SPDStiffness` (P, Q, residual, eigenvalues).
         A: (N, n) rad, the displacements; B: (N, n) N·m, the compensated torque changes.
@@ -37,6 +39,7 @@ class StaticStiffness:
     """
 
     K_ls: np.ndarray
+    K_ls_std: np.ndarray
     K: np.ndarray
     spd: SPDStiffness
     A: np.ndarray
@@ -92,6 +95,11 @@ def static_stiffness(
         raise DataError("the interval means contain NaN or inf")
     if shape[0] < shape[1]:
         raise EstimationError(f"need at least n = {shape[1]} disturbances, got {shape[0]}")
+    spd = chen_mcinroy(A, B)  # raises on a singular A^T A before the inverse below
     x_ls = np.linalg.lstsq(A, B, rcond=None)[0]
-    spd = chen_mcinroy(A, B)
-    return StaticStiffness(K_ls=x_ls.T, K=spd.K, spd=spd, A=A, B=B, gravity_compensated=g_pre is not None)
+    dof = max(shape[0] - shape[1], 1)
+    sigma2 = np.sum((A @ x_ls - B) ** 2, axis=0) / dof  # (n,) per torque component
+    x_std = np.sqrt(np.outer(np.diag(np.linalg.inv(A.T @ A)), sigma2))
+    return StaticStiffness(
+        K_ls=x_ls.T, K_ls_std=x_std.T, K=spd.K, spd=spd, A=A, B=B, gravity_compensated=g_pre is not None
+    )
