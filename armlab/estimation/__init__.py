@@ -54,6 +54,15 @@ from armlab.estimation.frf import (
     design_fir_lowpass,
     estimate_frf,
 )
+from armlab.estimation.inverse_kinematics import (
+    IKResult,
+    frobenius_residual,
+    inverse_kinematics,
+)
+from armlab.estimation.joint_centres import (
+    JointCentreFit,
+    joint_centre,
+)
 from armlab.estimation.joint_ls import (
     PARAM_NAMES,
     REDUCED_PARAM_NAMES,
@@ -114,10 +123,36 @@ from armlab.estimation.smoothing import (
     smooth_and_differentiate,
 )
 from armlab.estimation.smoothing import differentiate as sg_differentiate
+from armlab.estimation.spd_stiffness import (
+    SPDStiffness,
+    area_criterion,
+    chen_mcinroy,
+    spd_from_pq,
+)
 from armlab.estimation.sqrt_damping_fit import (
     SqrtDampingFit,
     cumulative_sqrt_damping_fit,
     fit_sqrt_damping_field,
+)
+from armlab.estimation.static_inertial import (
+    GRAVITY_MS2,
+    StaticInertialFit,
+    gravity_stiffness_from_fit,
+    gravity_torque_from_fit,
+    static_inertial_regression,
+    static_regressor,
+)
+from armlab.estimation.static_stiffness import (
+    StaticStiffness,
+    external_joint_torque,
+    static_stiffness,
+)
+from armlab.estimation.stiffness_ellipsoid import (
+    FIG3_RADIUS_M,
+    StiffnessEllipsoid,
+    axis_angle_deg,
+    ellipsoid_surface,
+    stiffness_ellipsoid,
 )
 from armlab.estimation.virtual_force import (
     ArmFit,
@@ -132,6 +167,29 @@ from armlab.estimation.virtual_force import (
 )
 
 __all__ = [
+    "IKResult",
+    "frobenius_residual",
+    "inverse_kinematics",
+    "JointCentreFit",
+    "joint_centre",
+    "SPDStiffness",
+    "area_criterion",
+    "chen_mcinroy",
+    "spd_from_pq",
+    "GRAVITY_MS2",
+    "StaticInertialFit",
+    "gravity_stiffness_from_fit",
+    "gravity_torque_from_fit",
+    "static_inertial_regression",
+    "static_regressor",
+    "StaticStiffness",
+    "external_joint_torque",
+    "static_stiffness",
+    "FIG3_RADIUS_M",
+    "StiffnessEllipsoid",
+    "axis_angle_deg",
+    "ellipsoid_surface",
+    "stiffness_ellipsoid",
     "alpha_grid",
     "refine_five_element",
     "fractional_five_element_sweep",

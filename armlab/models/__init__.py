@@ -1,5 +1,26 @@
 """Loading and composing the MJCF models, analytic arm kinematics, and ground truth."""
 
+from armlab.models.arm5_truth import (
+    XI_RED_NAMES,
+    InertialTruth,
+    JointCentreTruth,
+    analytic_damping,
+    analytic_stiffness,
+    gravity_stiffness,
+    gravity_torque,
+    inertial_truth,
+    joint_centre_truth,
+    stiffness_fd,
+)
+from armlab.models.arm_5dof import (
+    ARM5_JOINTS,
+    ARM5_MUSCLES,
+    ELECTRODE_MUSCLES,
+    MARKERS,
+    Arm5Dof,
+    limb_kinematics,
+    load_arm_5dof,
+)
 from armlab.models.arm_endpoint import EndpointTruth, endpoint_truth, relaxed_activation
 from armlab.models.capstan_robot import TABLE_VI_ALPHA, CapstanDynamics, CapstanParameters
 from armlab.models.capstan_scene import LOADS, CapstanScene, build_capstan_scene
@@ -21,6 +42,7 @@ from armlab.models.ground_truth import (
     GroundTruth,
     base_inertial_parameters,
     ground_truth,
+    impedance_fd,
     joint_impedance,
 )
 from armlab.models.joint_rig_scene import (
@@ -28,6 +50,11 @@ from armlab.models.joint_rig_scene import (
     Joint1DofScene,
     JointSubject,
     build_joint_rig_scene,
+)
+from armlab.models.limb_kinematics import (
+    LimbKinematics,
+    LimbPose,
+    axis_rotation,
 )
 from armlab.models.oustaloup import FractionalElement, oustaloup_zpk
 from armlab.models.robot_fk import (
@@ -66,6 +93,27 @@ from armlab.models.tf_structures import (
 )
 
 __all__ = [
+    "XI_RED_NAMES",
+    "InertialTruth",
+    "JointCentreTruth",
+    "analytic_damping",
+    "analytic_stiffness",
+    "gravity_stiffness",
+    "gravity_torque",
+    "inertial_truth",
+    "joint_centre_truth",
+    "stiffness_fd",
+    "ARM5_JOINTS",
+    "ARM5_MUSCLES",
+    "ELECTRODE_MUSCLES",
+    "MARKERS",
+    "Arm5Dof",
+    "limb_kinematics",
+    "load_arm_5dof",
+    "impedance_fd",
+    "LimbKinematics",
+    "LimbPose",
+    "axis_rotation",
     "Joint1DofScene",
     "JointSubject",
     "PAYLOAD_OWN_INERTIA_KGM2",

@@ -1,8 +1,8 @@
 """Ground truth of the simulated arm, computed from the compiled model (never from the config).
 
-- Intrinsic joint stiffness K and damping D (2x2) at the operating point: central finite
-  differences of the arm's actuator + passive joint forces with respect to the arm's joint
-  positions and velocities, with muscle activations frozen (``mj_forward`` does not integrate
+- Intrinsic joint stiffness K and damping D (n x n; 2 x 2 for the planar arm) at the operating
+  point: central finite differences of the arm's actuator + passive joint forces with respect to
+  the arm's joint positions and velocities, with muscle activations frozen (``mj_forward`` does not integrate
   ``act``). Reflexes are excluded by construction: they act through activation.
 - Base inertial parameters xi of eq. (13) of the conditioning paper from the body inertias of
   the arm and the bodies welded to it (the cuff shell, with its own inertia), plus, for a rigid
@@ -23,6 +23,7 @@ __all__ = [
     "GroundTruth",
     "base_inertial_parameters",
     "ground_truth",
+    "impedance_fd",
     "joint_impedance",
 ]
 
@@ -54,13 +55,23 @@ class GroundTruth:
         }
 
 
-def joint_impedance(scene: Scene, state: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Intrinsic K and D of the arm at a full-physics ``state`` (activations frozen).
+def impedance_fd(
+    model: mujoco.MjModel, state: np.ndarray, qpos_idx: np.ndarray, dof_idx: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Intrinsic n x n stiffness and damping of the joints ``dof_idx`` at a full-physics ``state``.
+
+    Central differences (step ``_FD_EPS``) of the actuator + passive joint forces with respect to
+    the joints' positions (``qpos_idx``, hinges/slides) and velocities, activations frozen
+    (``mj_forward`` does not integrate ``act``; reflexes act through activation, so they are
+    excluded by construction).
 
     Returns:
-        (K (2, 2) N·m/rad, D (2, 2) N·m·s/rad).
+        (K (n, n), D (n, n)), restoring sign (tau = -K dq - D dqd), in the joints' units
+        (N·m/rad, N·m·s/rad for hinges).
     """
-    model = scene.model
+    qpos_idx = np.asarray(qpos_idx)
+    dof_idx = np.asarray(dof_idx)
+    n = len(dof_idx)
     data = mujoco.MjData(model)
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
     mujoco.mj_setState(model, data, np.asarray(state, float), spec)
@@ -70,16 +81,25 @@ def joint_impedance(scene: Scene, state: np.ndarray) -> tuple[np.ndarray, np.nda
     def torque(dq: np.ndarray, dv: np.ndarray) -> np.ndarray:
         data.qpos[:] = qpos0
         data.qvel[:] = qvel0
-        data.qpos[scene.arm_qpos] += dq
-        data.qvel[scene.arm_dof] += dv
+        data.qpos[qpos_idx] += dq
+        data.qvel[dof_idx] += dv
         mujoco.mj_forward(model, data)
-        return (data.qfrc_actuator + data.qfrc_passive)[scene.arm_dof].copy()
+        return (data.qfrc_actuator + data.qfrc_passive)[dof_idx].copy()
 
-    eye = np.eye(2) * _FD_EPS
-    zero = np.zeros(2)
+    eye = np.eye(n) * _FD_EPS
+    zero = np.zeros(n)
     K = -np.stack([(torque(e, zero) - torque(-e, zero)) / (2 * _FD_EPS) for e in eye], axis=1)
     D = -np.stack([(torque(zero, e) - torque(zero, -e)) / (2 * _FD_EPS) for e in eye], axis=1)
     return K, D
+
+
+def joint_impedance(scene: Scene, state: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Intrinsic K and D of the planar arm at a full-physics ``state`` (activations frozen).
+
+    Returns:
+        (K (2, 2) N·m/rad, D (2, 2) N·m·s/rad).
+    """
+    return impedance_fd(scene.model, state, scene.arm_qpos, scene.arm_dof)
 
 
 def _composite(model: mujoco.MjModel, bodies: list[int], frame: int) -> tuple[float, np.ndarray, float]:

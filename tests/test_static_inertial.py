@@ -1,0 +1,111 @@
+"""Tests for armlab.estimation.static_inertial (seed paper 001, Eqs. (11)-(13), (22)): the spec's
+acceptance check 4 on base-wrench data generated with MuJoCo from models/arm_5dof (the arm held
+still in 40 configurations), ideal and through a realistic base F/T channel and IK of noisy markers."""
+
+from __future__ import annotations
+
+import mujoco
+import numpy as np
+import pytest
+from arm5_data import MARKER_RATE_HZ, add_marker_noise, site_frames
+from numpy.testing import assert_allclose
+
+from armlab.errors import DataError, EstimationError
+from armlab.estimation import (
+    gravity_stiffness_from_fit,
+    gravity_torque_from_fit,
+    inverse_kinematics,
+    static_inertial_regression,
+)
+from armlab.models import gravity_stiffness, gravity_torque, inertial_truth, limb_kinematics, load_arm_5dof
+from armlab.sensors.channel import ChannelSpec, apply_channel
+
+ARM = load_arm_5dof()
+
+
+def _base_wrench(data: mujoco.MjData) -> np.ndarray:
+    """(6,) the base F/T reading (f N, n N m)."""
+    return np.r_[data.sensordata[ARM.sensors["base_force"]], data.sensordata[ARM.sensors["base_torque"]]]
+
+
+KIN = limb_kinematics(ARM)
+TRUTH = inertial_truth(ARM)
+FT_RATE_HZ = 2000.0  # paper Sec. 3: base JR3 at 2 kHz
+HOLD_S = 1.0  # spec design: hold each configuration 1 s
+# Base JR3 under the seat (spec Set-up, assumption): +-2000 N / +-200 N m over 16 bits, noise of
+# 3 counts, an untared offset (the subject sits on it) of 2 N / 0.2 N m std: the intercept absorbs it.
+BASE_FORCE = ChannelSpec(noise_std=3 * 4000 / 65536, bias_std=2.0, quant_step=4000 / 65536)
+BASE_TORQUE = ChannelSpec(noise_std=3 * 400 / 65536, bias_std=0.2, quant_step=400 / 65536)
+
+
+def _configurations(n: int, seed: int) -> np.ndarray:
+    """(n, 5) rad: the default posture +-0.7 rad, inside every joint range (40 predefined
+    configurations of the paper, Sec. 3; their values are not given)."""
+    return ARM.q0 + np.random.default_rng(seed).uniform(-0.7, 0.7, (n, 5))
+
+
+def _held_wrench(q: np.ndarray) -> np.ndarray:
+    """(n, 6) base wrench (f, n) of the arm held still at each q (MuJoCo's static inverse)."""
+    out = np.empty((len(q), 6))
+    for i, qi in enumerate(q):
+        data = ARM.data_at(qi)
+        data.qacc[:] = 0.0
+        mujoco.mj_inverse(ARM.model, data)
+        out[i] = _base_wrench(data)
+    return out
+
+
+def test_ideal_data_recover_xi_red():
+    q = _configurations(40, 31)
+    fit = static_inertial_regression(KIN, q, _held_wrench(q))
+    # spec check 4: every identifiable combination within 1 % (entries that are zero in the model:
+    # within 1 % of the largest first moment); ideal static data make it exact to rounding
+    tol = 0.01 * np.maximum(np.abs(TRUTH.xi_red), np.abs(TRUTH.xi_red[1:]).max())
+    assert np.all(np.abs(fit.xi_red - TRUTH.xi_red) <= tol)
+    assert_allclose(fit.xi_red, TRUTH.xi_red, atol=1e-9)
+    held_out = _configurations(10, 32)
+    g_fit = gravity_torque_from_fit(KIN, fit.xi_red, held_out)
+    assert_allclose(g_fit, gravity_torque(ARM, held_out), atol=1e-9)
+    # dG/dq from the fit equals MuJoCo's (finite differences of both: 1e-6 N m/rad)
+    dg_fit = gravity_stiffness_from_fit(KIN, fit.xi_red, ARM.q0)
+    assert_allclose(dg_fit, gravity_stiffness(ARM, ARM.q0), atol=1e-6)
+
+
+def test_realistic_base_sensor_and_markers_predict_gravity_within_0_1_nm():
+    rng = np.random.default_rng(33)
+    q = _configurations(50, 34)
+    fit_q, held_q = q[:40], q[40:]
+    n_ft = round(HOLD_S * FT_RATE_HZ)
+    clean = np.repeat(_held_wrench(fit_q)[:, None, :], n_ft, axis=1)
+    wrench = np.concatenate(
+        [
+            apply_channel(clean[..., :3], FT_RATE_HZ, BASE_FORCE, rng),
+            apply_channel(clean[..., 3:], FT_RATE_HZ, BASE_TORQUE, rng),
+        ],
+        axis=-1,
+    ).mean(axis=1)
+    # joint angles: IK of the noisy wrist frame over the 1 s hold, averaged (paper Sec. 4.1); the
+    # solver starts at the predefined configuration missed by 0.1 rad (the subject's imprecision)
+    n_mk = round(HOLD_S * MARKER_RATE_HZ)
+    q_rep = np.repeat(fit_q, n_mk, axis=0)
+    (pos,), (rot,) = (a.transpose(1, 0, *range(2, a.ndim)) for a in site_frames(ARM, q_rep, ("wrist",)))
+    pos, rot = add_marker_noise(pos, rot, rng)
+    start = np.repeat(fit_q + rng.normal(0.0, 0.1, fit_q.shape), n_mk, axis=0)
+    q_ik = inverse_kinematics(KIN, rot, pos, start).q.reshape(40, n_mk, 5).mean(axis=1)
+    fit = static_inertial_regression(KIN, q_ik, wrench)
+    err = gravity_torque_from_fit(KIN, fit.xi_red, held_q) - gravity_torque(ARM, held_q)
+    rms = float(np.sqrt(np.mean(err**2)))
+    assert rms < 0.1, rms  # spec check 4: 10 held-out configurations, realistic base sensor
+
+
+def test_bad_input_is_refused():
+    q = _configurations(5, 35)
+    with pytest.raises(DataError, match="wrench"):
+        static_inertial_regression(KIN, q, np.zeros((5, 3)))
+    with pytest.raises(EstimationError, match="at least 3"):
+        static_inertial_regression(KIN, q[:2], np.zeros((2, 6)))
+    still = np.repeat(q[:1], 20, axis=0)  # one configuration repeated: nothing to regress
+    with pytest.raises(EstimationError, match="rank"):
+        static_inertial_regression(KIN, still, _held_wrench(still))
+    with pytest.raises(DataError, match="xi_red"):
+        gravity_torque_from_fit(KIN, np.zeros(8), q)
