@@ -54,7 +54,7 @@ def _short(measured: Any) -> str:
 def format_cartesian_table(results: Mapping[str, Any]) -> str:
     """Spec 002's nine checks beside the thesis's claims, then the Exp. 4 convergence, as text."""
     lines = [
-        f"cartesian_online (paper 002, thesis Ch. 3), level {results.get('level', 'A')}, "
+        f"{results.get('protocol', '')} (paper 002, thesis Ch. 3), level {results.get('level', 'A')}, "
         f"stiffness_scale {results.get('stiffness_scale', 1.0):g}, force noise "
         + ", ".join(f"{c} {n:g} N" for c, n in results.get("noise_std_N", {}).items() if n)
         + ("" if any(results.get("noise_std_N", {}).values()) else "0 N (the thesis)")

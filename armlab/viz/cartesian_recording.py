@@ -1,4 +1,4 @@
-"""Rerun recording of a ``cartesian_online`` run: path, stops, hand, forces and K̂ ellipses over time.
+"""Rerun recording of a paper 002 (Cartesian online LS) run: path, stops, forces, K̂ ellipses.
 
 Layout (entity paths), on the ``sim_time`` timeline (s of the experiment's wall time; the thesis
 logs only during perturbations, so time jumps between them):
@@ -58,7 +58,7 @@ def write_cartesian_recording(
     max_hz: float = 50.0,
     force_scale_m_per_n: float = 2e-4,
     k_scale_m_per_n_per_m: float = 1e-6,
-    application_id: str = "armlab_cartesian_online",
+    application_id: str = "armlab",
 ) -> Path:
     """Write the recording described in the module docstring.
 

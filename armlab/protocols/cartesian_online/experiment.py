@@ -251,7 +251,9 @@ def records_from_trials(trials: TrialSet, force_channel: str = "hand_force") -> 
         stop_position = np.empty((n_stops, 2))
         stop_position[stop_of] = np.stack([meta["stop_x"][rows], meta["stop_y"][rows]], axis=1)
         within = np.arange(trials.n_samples)[None, :].repeat(len(rows), 0)[keep]
-        t = within / trials.fs_hz + (np.repeat(meta["t_start_s"][rows], n) if "t_start_s" in meta else 0.0)
+        # wall time as the generator samples it: (sample index) / fs
+        first = np.round(meta["t_start_s"][rows] * trials.fs_hz) if "t_start_s" in meta else 0.0
+        t = (np.repeat(first, n) + within) / trials.fs_hz
         zeros = np.zeros_like(q_r)
         # the reference is stopped while logging (q̇_r = 0), so q̇_h = q̇_p exactly
         timeline = StopTimeline(
