@@ -15,7 +15,13 @@ from hydra.core.config_store import ConfigStore
 from armlab.config.effects import register_effect_configs
 from armlab.config.store import CONFIG_DIR
 from armlab.errors import ConfigError
-from armlab.protocols import conditioning_window, fractional_elbow, joint_1dof, virtual_force_sensor
+from armlab.protocols import (
+    cartesian_online,
+    conditioning_window,
+    fractional_elbow,
+    joint_1dof,
+    virtual_force_sensor,
+)
 from armlab.protocols.base import Protocol
 
 __all__ = [
@@ -109,6 +115,7 @@ register(conditioning_window.PROTOCOL)
 register(fractional_elbow.PROTOCOL)
 register(virtual_force_sensor.PROTOCOL)
 register(joint_1dof.PROTOCOL)
+register(cartesian_online.PROTOCOL)
 
 #: what ``armlab run`` runs when no protocol is given (and ``make run``)
 DEFAULT_PROTOCOL = conditioning_window.PROTOCOL.name

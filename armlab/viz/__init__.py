@@ -5,6 +5,11 @@ only inside its functions.
 """
 
 from armlab.viz._paths import preload_rerun
+from armlab.viz.cartesian import (
+    format_cartesian_table,
+    plot_cartesian_figures,
+)
+from armlab.viz.cartesian_recording import write_cartesian_recording
 from armlab.viz.ci_sweep import plot_ci_window_sweep
 from armlab.viz.cond_diagnosis import (
     cond_diagnosis_figures,
@@ -53,6 +58,9 @@ __all__ = [
     "format_vfs_tables",
     "plot_vfs_figures",
     "write_vfs_recording",
+    "format_cartesian_table",
+    "plot_cartesian_figures",
+    "write_cartesian_recording",
     "cond_diagnosis_figures",
     "cond_diagnosis_recording",
     "diagnosis_figures",

@@ -1,0 +1,43 @@
+"""Protocol ``cartesian_online``: position-dependent Cartesian impedance by online LS (../shared/seeds/002).
+
+The MSc thesis's Chapter 3: a hand whose diagonal stiffness is a quadratic of its position
+(Tables 3.1/3.2) is perturbed by a robot stopping on a reference path; five experiments identify
+it by least squares re-solved as data arrives, up to a polar model. Level A: the thesis's own
+algebraic generator (levels B and C come later).
+"""
+
+from armlab.protocols.base import Protocol
+from armlab.protocols.cartesian_online import hooks, preflight
+from armlab.protocols.cartesian_online.config import (
+    CartesianOnlineConfig,
+    IdentificationConfig,
+    SimulationConfig,
+)
+
+__all__ = [
+    "PROTOCOL",
+    "CartesianOnlineConfig",
+    "IdentificationConfig",
+    "SimulationConfig",
+]
+
+PROTOCOL = Protocol(
+    name="cartesian_online",
+    paper="seeds/002: position-dependent Cartesian impedance, online LS, polar model (MSc thesis Ch. 3)",
+    summary="quadratic hand stiffness field perturbed on a path; per-sequence, cumulative and recursive LS",
+    schema=CartesianOnlineConfig,
+    groups={"sensors": "ideal", "simulation": "level_a"},
+    simulate=hooks.simulate,
+    validate=preflight.validate,
+    reestimate_group="identification",
+    reestimate=hooks.reestimate,
+    outputs=hooks.outputs,
+    format_table=hooks.format_table,
+    examples=(
+        "run protocol=cartesian_online simulation.force_noise_std_N=0.05",
+        "run protocol=cartesian_online simulation.stiffness_scale=0.05 seed=3",
+        "estimate outputs/cartesian_online/<run> identification.r2_adj_threshold=0.99",
+    ),
+    lab_effects={"force_sensor_noise": "simulation.force_noise_std_N"},
+    catalogue=("force_sensor_noise",),
+)

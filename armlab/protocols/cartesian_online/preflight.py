@@ -1,0 +1,39 @@
+"""The checks of a ``cartesian_online`` config that need no simulation (``Protocol.validate``).
+
+Run by :func:`armlab.protocols.compose.compose`, so ``armlab run`` refuses before its run folder
+exists: level A has ideal sensors (its one sensor effect is ``simulation.force_noise_std_N``) and
+no physics step (``sim.*`` is read by levels B and C only), and the waveforms need at least 10
+samples per ramp at ``sensors.fs_hz``.
+"""
+
+from __future__ import annotations
+
+from armlab.config.schema import SimConfig
+from armlab.errors import ConfigError
+from armlab.perturbations.ramp_waveforms import TRAPEZOIDAL
+from armlab.protocols.cartesian_online.config import CartesianOnlineConfig
+
+__all__ = ["validate"]
+
+
+def validate(cfg: CartesianOnlineConfig) -> None:
+    """Raise :class:`ConfigError` on a setting level A cannot honour (never ignore it)."""
+    s = cfg.simulation
+    if s.level == "A":
+        if cfg.sensors.preset != "ideal":
+            raise ConfigError(
+                f"sensors.preset={cfg.sensors.preset!r}: level A's sensors are the thesis's ideal ones "
+                "(valid: ideal); set force noise with simulation.force_noise_std_N"
+            )
+        if cfg.sim != SimConfig():
+            raise ConfigError(
+                "sim.* is not read at simulation.level=A (the thesis's algebraic generator has no physics "
+                "step); valid: leave sim at its defaults"
+            )
+    # the trapezoid's 50 ms ramp is the shortest segment (thesis §3.1.1)
+    shortest = min(TRAPEZOIDAL.durations)
+    if cfg.sensors.fs_hz * shortest < 10:
+        raise ConfigError(
+            f"sensors.fs_hz={cfg.sensors.fs_hz:g} Hz gives fewer than 10 samples on the trapezoid's "
+            f"{shortest:g} s ramp; valid: >= {10 / shortest:g} Hz (thesis: 1000 Hz)"
+        )
