@@ -234,9 +234,14 @@ def record_trials(
         ),
         hint=_UNSTABLE_HINT,
     )
-    sim = simulate(
-        scene, hold.state, paths, muscle_base, cfg.reflex, substeps=substeps, who=who, target_rows=path_of
-    )
+    kinematics = RobotKinematics.from_scene(scene)
+    # the compiled kinematics (numba and its cached machine code, ~0.2 s) load while the trials step
+    with ThreadPoolExecutor(max_workers=1) as loader:
+        loaded = loader.submit(kinematics.forward, np.zeros((1, 7)))
+        sim = simulate(
+            scene, hold.state, paths, muscle_base, cfg.reflex, substeps=substeps, who=who, target_rows=path_of
+        )
+        loaded.result()
 
     sd = sim.sensordata
     check_bound(
@@ -279,7 +284,7 @@ def record_trials(
             measured["ft_force"] = measured["ft_force"] + rng.normal(
                 0.0, cfg.effects.force_sensor_noise.std, measured["ft_force"].shape
             )
-        contact, ft_rot = _forward_by_halves(RobotKinematics.from_scene(scene), measured["robot_q"])
+        contact, ft_rot = _forward_by_halves(kinematics, measured["robot_q"])
         hand_pos = (contact - scene.shoulder_pos)[..., :2]
         hand_force = np.einsum("...ij,...j->...i", ft_rot, measured["ft_force"])[..., :2]
         channels = {"hand_pos": hand_pos, "hand_force": hand_force, **measured, **true.result()}
