@@ -56,8 +56,7 @@ def test_effects_of_one_protocol(capsys):
     [
         (
             ["effects", "protocol=nope"],
-            "no effects for protocol 'nope'; valid protocols: ['conditioning_window', 'fractional_elbow', "
-            "'joint_1dof', 'virtual_force_sensor']",
+            f"no effects for protocol 'nope'; valid protocols: {sorted(registry.names())}",
         ),
         (["effects", "foo"], "argument 'foo' must look like key=value"),
         (["effects", "bar=1"], "unknown argument 'bar=1'; valid: ['protocol=']"),

@@ -131,21 +131,17 @@ def test_criteria_config_validation(kwargs, message):
 
 def test_public_api_resolves():
     import importlib
+    import pkgutil
 
     import armlab.estimation as est
-    import armlab.estimation.criteria as crit
-    import armlab.estimation.five_element_fit as ffit
-    import armlab.estimation.frf as frf
-    import armlab.estimation.joint_ls as ls
-    import armlab.estimation.levy as levy
     import armlab.estimation.processing as proc
     import armlab.estimation.smoothing as sm
 
-    # these modules share their names with the functions the package exports: import by path
-    sig = importlib.import_module("armlab.estimation.capstan_signals")
-    vf = importlib.import_module("armlab.estimation.virtual_force")
-
-    modules = (crit, ls, proc, frf, levy, ffit, sig, sm, vf)
+    # every module of the package (some share their names with the functions it exports)
+    modules = [
+        importlib.import_module(f"armlab.estimation.{info.name}")
+        for info in pkgutil.iter_modules(est.__path__)
+    ]
     for module in (est, *modules):
         assert all(hasattr(module, name) for name in module.__all__), module.__name__
     # smoothing.differentiate is exported as sg_differentiate (processing.differentiate keeps the name)
