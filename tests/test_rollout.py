@@ -167,3 +167,19 @@ def test_trials_sharing_a_path_read_it_by_row(lab):
     assert by_row.sensordata.shape[0] == 3
     assert_array_equal(by_row.sensordata, copied.sensordata)
     assert_array_equal(by_row.qpos, copied.qpos)
+
+
+@pytest.mark.parametrize("rows", [np.array([0, 2]), np.array([-1]), np.array([[0]]), np.array([0.0])])
+def test_target_rows_outside_the_paths_are_refused(lab, rows):
+    from armlab.errors import SimulationError
+
+    with pytest.raises(SimulationError, match="target_rows"):
+        simulate(
+            lab.scene,
+            lab.hold.state,
+            _ramped_targets(lab),
+            lab.hold.activation,
+            ReflexConfig(),
+            substeps=SUBSTEPS,
+            target_rows=rows,
+        )

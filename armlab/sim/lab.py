@@ -83,7 +83,7 @@ def _force_effects(z: np.ndarray, effects: EffectsConfig, fs: float) -> np.ndarr
 
 def _forward_by_halves(fk: RobotKinematics, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``fk.forward(q)`` of (n_trials, n_samples, 7) encoder angles, the two halves of the trials
-    on two threads (NumPy releases the GIL in its array loops). Every sample's chain is computed
+    on two threads (the compiled kernel runs without the GIL). Every sample's chain is computed
     alone by the same operations, so the result is bit-identical to one call."""
     n = q.shape[0]
     if n < 2 or (os.cpu_count() or 1) < 2:

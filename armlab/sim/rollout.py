@@ -164,6 +164,14 @@ def simulate(
         target_rows = slice(None)
     else:
         target_rows = np.asarray(target_rows)
+        n_paths = robot_targets.shape[0]
+        if target_rows.ndim != 1 or target_rows.dtype.kind not in "iu":
+            raise SimulationError(f"target_rows must be a 1-D array of row indices, got {target_rows!r}")
+        if target_rows.size and not (target_rows.min() >= 0 and target_rows.max() < n_paths):
+            raise SimulationError(
+                f"target_rows must index the {n_paths} rows of robot_targets (0..{n_paths - 1}), "
+                f"got rows {target_rows.min()}..{target_rows.max()}"
+            )
         n_trials = target_rows.size
     muscle_base = np.asarray(muscle_base, float)
     per_step = muscle_base.ndim == 3

@@ -81,11 +81,13 @@ def _groups(trials: TrialSet) -> np.ndarray:
     return np.asarray(trials.trial_meta.get("group", np.zeros(n, dtype=int))).astype(int)
 
 
-def _batch_path(k: int, onset: int, batches: Mapping[tuple[int, int], Sequence[int]]) -> str:
-    """Entity path of the trials of window ``k`` with onset sample ``onset``: ``trials/k{k:02d}``,
-    or ``trials/k{k:02d}/onset{onset}`` where the window's trials have several onsets."""
-    several = sum(1 for kk, _ in batches if kk == k) > 1
-    return f"trials/k{k:02d}" + (f"/onset{onset}" if several else "")
+def _batch_paths(batches: Mapping[tuple[int, int], Sequence[int]]) -> dict[tuple[int, int], str]:
+    """Entity path of each (window k, onset sample) batch: ``trials/k{k:02d}``, or
+    ``trials/k{k:02d}/onset{onset}`` where the window's trials have several onsets."""
+    onsets_of: dict[int, int] = {}
+    for k, _ in batches:
+        onsets_of[k] = onsets_of.get(k, 0) + 1
+    return {(k, o): f"trials/k{k:02d}" + (f"/onset{o}" if onsets_of[k] > 1 else "") for k, o in batches}
 
 
 def _onset_text(k: int, members: np.ndarray, meta: Mapping[str, np.ndarray]) -> str:
@@ -297,26 +299,26 @@ def write_recording(
     )
     truth = _truth_params(results, windows, ground_truth) if windows else {}
 
+    entity = _batch_paths(batches)
     bp = None
     if blueprint:
-        paths = {
-            key: (_batch_path(key[0], key[1], batches), bool(poses) and bool(with_pose[rows].any()))
-            for key, rows in batches.items()
-        }
+        posed = {key: bool(poses) and bool(with_pose[rows].any()) for key, rows in batches.items()}
+        paths = {key: (entity[key], posed[key]) for key in batches}
         bp = _blueprint(
             rrb, paths, channels, [name for _, name, _, _ in poses], t_obs_by_k, models, list(truth)
         )
+    axis_names = {ch: _series_names(trials, ch) for ch in channels}
     with recording(p, "armlab", bp) as rec:
         for (k, onset), rows_of in batches.items():
-            base = _batch_path(k, onset, batches)
+            base = entity[k, onset]
             members = np.asarray(rows_of)
             start = max(0, onset - pre)
             rows = _onset_aligned(onset, start, n_samples, step_scalar)
             time_col = [rr.TimeColumn(_TRIAL_TIMELINE, duration=(rows - onset) / fs)]
             for ch in channels:
                 # (rows, trials, axes): each row holds every trial's axes, instance j = trial * n_axes + axis
-                x = np.ascontiguousarray(np.moveaxis(trials.channels[ch][members][:, rows, :], 1, 0))
-                names = [f"t{i:03d} {axis}" for i in members for axis in _series_names(trials, ch)]
+                x = np.ascontiguousarray(np.moveaxis(trials.channels[ch][members[:, None], rows], 1, 0))
+                names = [f"t{i:03d} {axis}" for i in members for axis in axis_names[ch]]
                 rec.log(f"{base}/{ch}", rr.SeriesLines(names=names), static=True)
                 rec.send_columns(
                     f"{base}/{ch}",
@@ -341,7 +343,7 @@ def write_recording(
                 per_row = np.full(idx.size, posed.size)
                 for c, name, colour, radius in poses:
                     # one (n_points, 3) strip per trial and row, rows after rows: (rows * trials, P, 3)
-                    pts = np.moveaxis(np.asarray(trials.channels[c][posed][:, idx, :], np.float32), 1, 0)
+                    pts = np.moveaxis(np.asarray(trials.channels[c][posed[:, None], idx], np.float32), 1, 0)
                     strips = np.ascontiguousarray(pts).reshape(idx.size * posed.size, -1, 3)
                     rec.send_columns(
                         f"{base}/pose/{name}",
