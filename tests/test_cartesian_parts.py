@@ -147,9 +147,10 @@ def test_experiment_bad_input():
         identify_exp4(rec2, method="quadratic")  # type: ignore[arg-type]
     with pytest.raises(ConfigError, match="window_blocks"):
         identify_exp4(rec2, method="sqrt_damping", window_blocks=3)
-    with pytest.raises(ConfigError, match="y = 0"):
+    # a record of the wrong shape is a data problem, not a config one
+    with pytest.raises(DataError, match="y = 0"):
         identify_exp3(rec2)
-    with pytest.raises(ConfigError, match="single-axis"):
+    with pytest.raises(DataError, match="single-axis"):
         identify_exp1(rec2)
 
 

@@ -14,7 +14,7 @@ from typing import Literal
 
 import numpy as np
 
-from armlab.errors import ConfigError
+from armlab.errors import ConfigError, DataError
 from armlab.estimation.cartesian_regressors import (
     linear_axis_regressor,
     linear_coupled_regressor,
@@ -23,7 +23,7 @@ from armlab.estimation.cartesian_regressors import (
     quadratic_x_regressor,
 )
 from armlab.estimation.field_scoring import FieldError, disc_grid, field_error, relative_error_pct
-from armlab.estimation.online_ls import cumulative_ls, per_block_ls
+from armlab.estimation.online_ls import OnlineLS, cumulative_ls, per_block_ls
 from armlab.estimation.polar import polar_signals, to_polar
 from armlab.estimation.sqrt_damping_fit import cumulative_sqrt_damping_fit
 from armlab.models.cartesian_field import quadratic_basis
@@ -72,8 +72,9 @@ def identify_exp1(record: CartesianRecord) -> Exp1Result:
     q_h, q_p, qd_h, f, pert, _, _ = _logged(record)
     axis = np.argmax(np.abs(tl.directions), axis=1)
     if np.any(np.all(tl.directions != 0, axis=1)):
-        raise ConfigError("Exp. 1 needs single-axis perturbations (the timeline moves both axes at once)")
-    k_hat, d_hat = np.empty(len(axis)), np.empty(len(axis))
+        raise DataError("Exp. 1 needs single-axis perturbations (the timeline moves both axes at once)")
+    # NaN for a perturbation without logged samples (no estimate)
+    k_hat, d_hat = np.full(len(axis), np.nan), np.full(len(axis), np.nan)
     for a in (0, 1):
         sel = axis[pert] == a
         if not np.any(sel):
@@ -134,7 +135,8 @@ def identify_exp2(record: CartesianRecord) -> Exp2Result:
     """Per-sequence LS with ``[x_p, y_p, ȧ_h]`` (§3.2.2)."""
     q_h, q_p, qd_h, f, _, stop, _ = _logged(record)
     n_s = record.timeline.n_stops
-    k_hat, d_hat = np.empty((n_s, 2, 2)), np.empty((n_s, 2))
+    # NaN for a sequence without logged samples (no estimate)
+    k_hat, d_hat = np.full((n_s, 2, 2), np.nan), np.full((n_s, 2), np.nan)
     for a in (0, 1):
         phi, _ = linear_coupled_regressor(q_p, qd_h, a)
         res = per_block_ls(phi, f[:, a], stop)
@@ -175,7 +177,7 @@ def identify_exp3(record: CartesianRecord) -> Exp3Result:
     """Cumulative LS with ``[x_p, x x_p, x² x_p, ẋ]`` (§3.3.2); needs y ≡ 0 (the thesis's path)."""
     q_h, q_p, qd_h, f, _, stop, _ = _logged(record)
     if np.any(q_h[:, 1] != 0):
-        raise ConfigError("Exp. 3's regressor assumes y = 0 along the path (K = k0 + k1 x + k3 x²)")
+        raise DataError("Exp. 3's regressor assumes y = 0 along the path (K = k0 + k1 x + k3 x²)")
     phi, _ = quadratic_x_regressor(q_h, q_p, qd_h)
     res = cumulative_ls(phi, f[:, 0], stop)
     c = record.field.scaled_coefficients[0]
@@ -203,6 +205,10 @@ class Exp4Result:
         damping_true: (s, 2) N·s/m, the model's δ√K at each stop.
         sqrt_k_hat: (s, 2) N·s/m, ``δ√K̂`` of the final field estimate at each stop (the thesis's
             substitute for the damping, §3.4.3; δ is the model's).
+        prediction: (n, 2) N, the final estimate's force on the logged samples (what
+            ``force_nrmse`` scores).
+        linear_fits: per axis, the cumulative LS of Eq. 3.4.1 after each stop (run for either
+            method: its rank is ``rank``).
     """
 
     method: str
@@ -213,6 +219,8 @@ class Exp4Result:
     force_nrmse: np.ndarray
     damping_true: np.ndarray
     sqrt_k_hat: np.ndarray
+    prediction: np.ndarray
+    linear_fits: tuple[OnlineLS, OnlineLS]
 
     @property
     def sqrt_k_error_pct(self) -> np.ndarray:
@@ -254,25 +262,28 @@ def identify_exp4(
     damp = np.full((n_s, 2, 2), np.nan)
     rank = np.zeros((n_s, 2), dtype=int)
     nrmse = np.empty(2)
+    pred = np.empty((len(f), 2))
+    fits = []
     for a in (0, 1):
         phi, _ = quadratic_field_regressor(q_h, q_p, qd_h, a)
         lin = cumulative_ls(phi, f[:, a], stop, window_blocks=window_blocks)
+        fits.append(lin)
         rank[lin.blocks, a] = lin.rank
         if method == "linear":
             full = lin.rank == phi.shape[1]
             coef[lin.blocks[full], a] = lin.theta[full, :6]
             damp[lin.blocks[full], a] = lin.theta[full, 6:]
-            pred = phi @ lin.theta[-1]
+            pred[:, a] = phi @ lin.theta[-1]
         else:
-            fits = cumulative_sqrt_damping_fit(q_h, q_p, qd_h, f[:, a], a, stop)
-            for b, fit in zip(lin.blocks, fits, strict=True):
+            nl = cumulative_sqrt_damping_fit(q_h, q_p, qd_h, f[:, a], a, stop)
+            for b, fit in zip(lin.blocks, nl, strict=True):
                 if fit is not None:
                     coef[b, a] = fit.k
                     damp[b, a, 0] = fit.delta
-            last = fits[-1]
+            last = nl[-1]
             k_at = quadratic_basis(q_h) @ last.k  # K_aa(q_h)
-            pred = k_at * q_p[:, a] + last.delta * np.sqrt(np.maximum(k_at, 0.0)) * qd_h[:, a]
-        nrmse[a] = np.sqrt(np.mean((pred - f[:, a]) ** 2) / np.mean(f[:, a] ** 2))
+            pred[:, a] = k_at * q_p[:, a] + last.delta * np.sqrt(np.maximum(k_at, 0.0)) * qd_h[:, a]
+        nrmse[a] = np.sqrt(np.mean((pred[:, a] - f[:, a]) ** 2) / np.mean(f[:, a] ** 2))
     pts = disc_grid() if grid is None else np.asarray(grid, dtype=float)
     stops = record.timeline.stop_position
     k_final = np.einsum("sj,aj->sa", quadratic_basis(stops), coef[-1])
@@ -285,6 +296,8 @@ def identify_exp4(
         rank=rank,
         field=field_error(coef, record.field, pts),
         force_nrmse=nrmse,
+        prediction=pred,
+        linear_fits=(fits[0], fits[1]),
     )
 
 

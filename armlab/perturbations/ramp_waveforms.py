@@ -21,6 +21,7 @@ from typing import Literal
 import numpy as np
 
 from armlab.errors import ConfigError
+from armlab.perturbations.quintic import quintic_profile
 
 __all__ = [
     "Shape",
@@ -112,12 +113,12 @@ class RampWaveform:
             ramp = np.maximum(tt, 0.0)
             bump = np.zeros_like(tt)
         else:
+            # the blend S and its rate: the quintic point-to-point profile over c, from tt = −c/2
+            step, bump, _ = quintic_profile(tt + c / 2, c)
             u = np.clip(tt / c + 0.5, 0.0, 1.0)
-            step = u**3 * (10 - 15 * u + 6 * u * u)
             # ∫ S over time: c·(2.5u⁴ − 3u⁵ + u⁶) inside the blend, then c/2 + (t − t_i − c/2) after it
             inside = c * u**4 * (2.5 - 3 * u + u * u)
             ramp = np.where(tt > c / 2, tt, inside)
-            bump = 30 * u * u * (1 - u) ** 2 / c
         p = ramp @ dv
         v = step @ dv
         a = bump @ dv

@@ -55,10 +55,6 @@ class CartesianRecord:
         """(n, 2) N/m, the true diagonal stiffness along the hand path."""
         return self.field.stiffness(self.timeline.q_h, self.sigma)
 
-    def damping_true(self) -> np.ndarray:
-        """(n, 2) N·s/m, the true diagonal damping along the hand path."""
-        return self.field.damping(self.timeline.q_h, self.sigma)
-
 
 def simulate_level_a(
     timeline: StopTimeline,

@@ -4,10 +4,11 @@ Inputs are what :func:`armlab.protocols.cartesian_online.results.estimate_cartes
 (``results``) and the plain arrays the protocol's hooks hand over (``series``):
 
 - ``convergence``: {label: (s,) %} the field error over the disc after each sequence (Exp. 4);
+- ``convergence_limits``: ((sequence, %), ...) the limits of spec 002's check 6 (drawn if given);
 - ``k_map``: ``grid`` (m, 2) m, ``k_true`` and ``k_hat`` (m, 2) N/m (the final Exp. 4 estimate),
   ``stops`` (s, 2) m, ``label``;
 - ``force``: ``t`` (n,) s, ``measured`` and ``predicted`` (n, 2) N (Exp. 4's logged samples),
-  ``label``.
+  ``fs_hz`` Hz (their sample rate), ``label``.
 
 Exp. 5's orders come from ``results['exp5']``. Plots use matplotlib's object API with the Agg
 canvas; every writer takes a fresh path and returns it. The recording is
@@ -25,6 +26,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from armlab.viz._paths import save_png
+from armlab.viz._ticks import plain_log_ticks
 
 __all__ = [
     "format_cartesian_table",
@@ -74,7 +76,7 @@ def format_cartesian_table(results: Mapping[str, Any]) -> str:
             if not isinstance(r, Mapping):
                 continue
             f = np.asarray(r["field_max_pct"], dtype=float)
-            picks = [i for i in (0, 1, 4, 19) if i < len(f)]
+            picks = sorted({i for i in (0, 1, 4, 19) if i < len(f)} | {len(f) - 1})
             lines.append(
                 f"{case} ({cell['noise_std_N']:g} N) {method}: field error after sequence "
                 + ", ".join(f"{i + 1}: {f[i]:.3g} %" for i in picks)
@@ -92,13 +94,16 @@ def format_cartesian_table(results: Mapping[str, Any]) -> str:
     return "\n".join(lines)
 
 
-def _convergence(series: Mapping[str, Any], results: Mapping[str, Any], path: Path) -> Path:
+def _convergence(series: Mapping[str, Any], path: Path) -> Path:
     fig = Figure(figsize=(7, 4.5))
     ax = fig.subplots()
     for label, err in series["convergence"].items():
         err = np.asarray(err, dtype=float)
         ax.semilogy(np.arange(1, len(err) + 1), err, "o-", ms=3, label=label)
-    ax.plot([5, 20], [3.0, 0.1], "kv", ms=8, label="spec 002 check 6 limits (0.05 N)")
+    limits = np.asarray(series.get("convergence_limits", ()), dtype=float).reshape(-1, 2)
+    if len(limits):
+        ax.plot(limits[:, 0], limits[:, 1], "kv", ms=8, label="spec 002 check 6 limits (0.05 N)")
+    plain_log_ticks(ax.yaxis)
     ax.axvline(2, color="0.6", ls=":", lw=1)
     ax.text(2.1, ax.get_ylim()[1], " thesis: 'converges by\n the second sequence'", va="top", fontsize=8)
     ax.set_xlabel("sequences of perturbations")
@@ -148,7 +153,7 @@ def _force(series: Mapping[str, Any], path: Path) -> Path:
         axes[a].plot(idx, pred[:, a], "--", lw=1, label="predicted (final estimate)")
         axes[a].plot(idx, meas[:, a] - pred[:, a], lw=0.8, label="residual")
         axes[a].set_ylabel(f"F_{name} (N)")
-    axes[1].set_xlabel("logged sample (perturbations only, 1 kHz)")
+    axes[1].set_xlabel(f"logged sample (perturbations only, {float(fo['fs_hz']):g} Hz)")
     axes[0].legend(fontsize=8)
     axes[0].set_title(f"Exp. 4 force prediction: {fo['label']}", fontsize=10)
     return save_png(fig, path)
@@ -195,7 +200,7 @@ def plot_cartesian_figures(
     out = Path(out_dir)
     written = {}
     if series.get("convergence"):
-        written["convergence"] = _convergence(series, results, out / "convergence.png")
+        written["convergence"] = _convergence(series, out / "convergence.png")
     if series.get("k_map"):
         written["k_maps"] = _k_maps(series, out / "k_maps.png")
     if series.get("force"):

@@ -4,8 +4,10 @@
 :func:`~armlab.protocols.cartesian_online.results.estimate_cartesian` and returns one row per check:
 what the thesis says, the spec's limit, what this run measured, whether it passed, and whether
 the run's settings are those the check is defined for (``applies``: the checks are defined on
-the thesis's noise-free generator, check 6 on 0.05 N of force noise; a run with other settings
-still reports its figures, marked as not applying).
+the thesis's noise-free generator with its 20 stops, check 6 on 0.05 N of force noise; a run with
+other settings still reports its figures, marked as not applying). A figure that needs more stops
+than the run has (the 5th or 20th sequence of a 3-stop run) is left out, and a check without it
+has ``passed: None``.
 """
 
 from __future__ import annotations
@@ -14,7 +16,13 @@ import numpy as np
 
 from armlab.models.cartesian_field import QuadraticImpedanceField
 
-__all__ = ["CHECK_NOISE_N", "THESIS_CENTRE", "acceptance_checks"]
+__all__ = [
+    "CHECK_NOISE_N",
+    "NOISE_CHECK_LIMITS",
+    "THESIS_CENTRE",
+    "THESIS_STOPS",
+    "acceptance_checks",
+]
 
 #: Thesis Tables 3.1/3.2 evaluated at the circle centre (0.95, 0.1) m (spec 002, checked):
 #: K_xx, K_yy N/m and D_xx, D_yy N·s/m
@@ -22,6 +30,11 @@ THESIS_CENTRE = {"K_N_per_m": (16109.5, 22985.8), "D_Ns_per_m": (126.9, 151.6)}
 CENTRE_M = (0.95, 0.1)  # m, thesis §3.2.1
 #: N, the force noise of spec 002's check 6
 CHECK_NOISE_N = 0.05
+#: spec 002 check 6: (sequence, largest field error in %): <= 3 % after 5 sequences, <= 0.1 % after 20
+NOISE_CHECK_LIMITS: tuple[tuple[int, float], ...] = ((5, 3.0), (20, 0.1))
+#: stops (perturbations, or sequences of them) per experiment: thesis §3.1-3.5 (20); the figures of
+#: checks 2-6 and 8 are defined on that many
+THESIS_STOPS = 20
 
 
 def _row(n, name, thesis, spec, measured, passed, applies=True, note=""):
@@ -37,10 +50,19 @@ def _row(n, name, thesis, spec, measured, passed, applies=True, note=""):
     }
 
 
+def _after(f: np.ndarray, sequences) -> dict:
+    """{``after_<k>``: f[k - 1]} for the sequences k the run has, and its last (``after_<n>``)."""
+    ks = sorted({k for k in sequences if k <= len(f)} | {len(f)})
+    return {f"after_{k}": float(f[k - 1]) for k in ks}
+
+
 def acceptance_checks(results: dict, field: QuadraticImpedanceField) -> list[dict]:
     """The nine rows (module docstring); a check whose experiment was not run has ``passed: None``."""
     noise = results["noise_std_N"]
-    clean = {c: n == 0 for c, n in noise.items()}
+    # the thesis's settings: noise-free and its 20 stops (a run from before n_stops was stored: 20)
+    stops = results.get("n_stops", {})
+    noise_free = {c: n == 0 for c, n in noise.items()}
+    clean = {c: free and stops.get(c, THESIS_STOPS) == THESIS_STOPS for c, free in noise_free.items()}
     s = field.stiffness_scale
     k = field.stiffness(np.asarray(CENTRE_M))
     d = field.damping(np.asarray(CENTRE_M))
@@ -129,9 +151,7 @@ def acceptance_checks(results: dict, field: QuadraticImpedanceField) -> list[dic
         lin, nl = e4.get("linear"), e4.get("sqrt_damping")
         m = {
             "rank_after_1": None if lin is None else np.asarray(lin["rank"])[0].tolist(),
-            "linear_field_max_pct": None
-            if lin is None
-            else np.asarray(lin["field_max_pct"])[[1, 4, -1]].tolist(),
+            "linear_field_max_pct": None if lin is None else _after(np.asarray(lin["field_max_pct"]), (2, 5)),
             "linear_force_nrmse": None if lin is None else lin["force_nrmse"],
             "sqrt_damping_coefficient_rel_err_after_2": None
             if nl is None
@@ -166,13 +186,13 @@ def acceptance_checks(results: dict, field: QuadraticImpedanceField) -> list[dic
     e4n = results.get("exp4_noise")
     if e4n:
         f = np.asarray(e4n["linear"]["field_max_pct"])
-        m = {
-            "field_max_pct_after_2": float(f[1]),
-            "after_5": float(f[4]),
-            "after_20": float(f[min(19, len(f) - 1)]),
-        }
-        ok = len(f) >= 20 and f[4] <= 3.0 and f[19] <= 0.1
-        applies = np.isclose(e4n["noise_std_N"], CHECK_NOISE_N)
+        m = {"field_max_pct": _after(f, (2, *(k for k, _ in NOISE_CHECK_LIMITS)))}
+        # a run with fewer sequences than the check reads has not measured it
+        ok = None
+        if all(k <= len(f) for k, _ in NOISE_CHECK_LIMITS):
+            ok = all(f[k - 1] <= lim for k, lim in NOISE_CHECK_LIMITS)
+        n_seq = stops.get("exp4_noise", THESIS_STOPS)
+        applies = np.isclose(e4n["noise_std_N"], CHECK_NOISE_N) and n_seq == THESIS_STOPS
     else:
         m, ok, applies = None, None, False
     rows.append(
@@ -180,7 +200,8 @@ def acceptance_checks(results: dict, field: QuadraticImpedanceField) -> list[dic
             6,
             "Exp. 4 with 0.05 N force noise",
             "§3.4.3 claims convergence by the second sequence (the thesis is noise-free)",
-            "field error <= 3 % after 5 sequences, <= 0.1 % after 20 (the claim holds only without noise)",
+            ", ".join(f"field error <= {lim:g} % after {k} sequences" for k, lim in NOISE_CHECK_LIMITS)
+            + " (the claim holds only without noise)",
             m,
             ok,
             applies,
@@ -195,8 +216,12 @@ def acceptance_checks(results: dict, field: QuadraticImpedanceField) -> list[dic
             "future work (Discussion): recursive LS",
             "equal to 1e-9 (the field, relative, where the scaled condition <= 1e7)",
             rls,
-            None if not rls else (rls["field_rel_diff_max_cond_le_1e7"] or 0.0) <= 1e-9,
+            # None when no block was well conditioned: nothing measured, nothing passed
+            None
+            if not rls or rls["field_rel_diff_max_cond_le_1e7"] is None
+            else rls["field_rel_diff_max_cond_le_1e7"] <= 1e-9,
             bool(rls),
+            "an algebraic identity: it holds for any stop count and noise",
         )
     )
     e5 = results.get("exp5")
@@ -211,11 +236,9 @@ def acceptance_checks(results: dict, field: QuadraticImpedanceField) -> list[dic
             ],
             "selected_counts": [e5["parameter_count"]["cartesian"], e5["parameter_count"]["polar"]],
         }
-        ok = (
-            min(m["k_r2_adj_11"]) >= 0.999
-            and m["d12_r2_adj_11_12"][1] > m["d12_r2_adj_11_12"][0]
-            and m["thesis_order_counts"] == [26, 28]
-        )
+        # gated on measured figures only: thesis_order_counts are the thesis's stated orders counted
+        # (a constant, reported beside the counts this run selected)
+        ok = min(m["k_r2_adj_11"]) >= 0.999 and m["d12_r2_adj_11_12"][1] > m["d12_r2_adj_11_12"][0]
     else:
         m, ok = None, None
     rows.append(
@@ -228,7 +251,8 @@ def acceptance_checks(results: dict, field: QuadraticImpedanceField) -> list[dic
             m,
             ok,
             bool(e5) and clean["exp5"],
-            "not gated: d21 and the polar anti-diagonal orders (they depend on unstated choices)",
+            "not gated: d21 and the polar anti-diagonal orders (they depend on unstated choices), and the "
+            "counts 26 / 28 (thesis_order_counts: the thesis's own orders counted, not a measurement)",
         )
     )
     a = results.get("appendix_a")
@@ -244,7 +268,7 @@ def acceptance_checks(results: dict, field: QuadraticImpedanceField) -> list[dic
             else a["scalar_rel_err_max"] <= 1e-9
             and a["matrix_rel_err_max"] <= 1e-9
             and a["reidentified_rel_err_max"] <= 1e-6,
-            bool(a) and clean["exp4"],
+            bool(a) and noise_free["exp4"],
             "re-identification by the 12 + 2 fit after a shift of origin, within 1e-6 (measured ~1e-10)",
         )
     )

@@ -18,7 +18,6 @@ from armlab.config.validate import check, choice
 
 __all__ = [
     "IDENTIFICATION_CHOICES",
-    "SIMULATION_LEVELS",
     "CartesianOnlineConfig",
     "IdentificationConfig",
     "SimulationConfig",
@@ -28,7 +27,6 @@ __all__ = [
 #: How the experiments are generated: (A) the thesis's algebraic generator (levels B: the LWR and a
 #: hand in MuJoCo, C: the Hill arm as truth, come with later slices of issue 20).
 SimulationLevel = Literal["A"]
-SIMULATION_LEVELS: tuple[str, ...] = get_args(SimulationLevel)
 #: Exp. 4 estimators: the thesis's Eq. 3.4.1 (constant damping columns) and the model's own D = δ√K.
 Exp4Method = Literal["linear", "sqrt_damping"]
 IDENTIFICATION_CHOICES: tuple[str, ...] = get_args(Exp4Method)

@@ -226,7 +226,17 @@ def records_from_trials(trials: TrialSet, force_channel: str = "hand_force") -> 
     Raises:
         DataError: if a channel or trial_meta key of this protocol is missing.
     """
-    need = ("case", "perturbation", "stop", "direction_x", "direction_y", "stop_x", "stop_y", "n_logged")
+    need = (
+        "case",
+        "waveform",
+        "perturbation",
+        "stop",
+        "direction_x",
+        "direction_y",
+        "stop_x",
+        "stop_y",
+        "n_logged",
+    )
     missing = [k for k in need if k not in trials.trial_meta]
     missing += [k for k in ("hand_vel", "ref_pos", "pert_pos", force_channel) if k not in trials.channels]
     if missing:
@@ -248,7 +258,7 @@ def records_from_trials(trials: TrialSet, force_channel: str = "hand_force") -> 
         pert = np.repeat(np.arange(len(rows)), n)
         stop_of = meta["stop"][rows]
         n_stops = int(stop_of.max()) + 1
-        stop_position = np.empty((n_stops, 2))
+        stop_position = np.full((n_stops, 2), np.nan)  # m; NaN at a stop without trials
         stop_position[stop_of] = np.stack([meta["stop_x"][rows], meta["stop_y"][rows]], axis=1)
         within = np.arange(trials.n_samples)[None, :].repeat(len(rows), 0)[keep]
         # wall time as the generator samples it: (sample index) / fs

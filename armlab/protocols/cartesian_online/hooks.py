@@ -9,6 +9,7 @@ from armlab.data.trial import TrialSet
 from armlab.models.cartesian_field import quadratic_basis
 from armlab.protocols._files import write_new
 from armlab.protocols.base import OutputContext, Simulated
+from armlab.protocols.cartesian_online.checks import NOISE_CHECK_LIMITS
 from armlab.protocols.cartesian_online.config import CartesianOnlineConfig, IdentificationConfig
 from armlab.protocols.cartesian_online.experiment import simulate_cartesian
 from armlab.protocols.cartesian_online.results import estimate_cartesian
@@ -28,7 +29,7 @@ _PATH_HZ = 20.0  # Hz, the reference path drawn in the recording (the thesis's p
 
 def _viz_series(full: dict, results: dict, series: dict) -> dict:
     """Plain arrays for :mod:`armlab.viz.cartesian` and the recording (their docstrings)."""
-    out: dict = {"convergence": {}, "recording": {}}
+    out: dict = {"convergence": {}, "convergence_limits": NOISE_CHECK_LIMITS, "recording": {}}
     for case in ("exp4", "exp4_noise"):
         for method, s in series.get(case, {}).items():
             noise = results[case]["noise_std_N"]
@@ -51,6 +52,7 @@ def _viz_series(full: dict, results: dict, series: dict) -> dict:
             "t": rec.timeline.t[rec.logged],
             "measured": rec.force[rec.logged],
             "predicted": best["prediction"],
+            "fs_hz": rec.timeline.fs,
             "label": label,
         }
     for case, rec in series["records"].items():

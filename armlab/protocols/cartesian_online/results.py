@@ -21,7 +21,6 @@ from armlab.estimation.cartesian_identification import (
 )
 from armlab.estimation.cartesian_regressors import quadratic_field_regressor
 from armlab.estimation.field_scoring import disc_grid
-from armlab.estimation.online_ls import cumulative_ls
 from armlab.estimation.order_selection import fit_separable_polynomial, parameter_count, select_order
 from armlab.estimation.recursive_ls import recursive_ls
 from armlab.estimation.sqrt_damping_fit import fit_sqrt_damping_field
@@ -108,21 +107,6 @@ def _exp3(rec) -> dict:
     }
 
 
-def _prediction(rec, r) -> np.ndarray:
-    """(n, 2) N: the final Exp. 4 estimate's force on the logged samples."""
-    tl, m = rec.timeline, rec.logged
-    q_h, q_p, qd_h = tl.q_h[m], tl.q_p[m], tl.qd_h[m]
-    pred = np.empty((int(m.sum()), 2))
-    for a in (0, 1):
-        if r.method == "linear":
-            phi, _ = quadratic_field_regressor(q_h, q_p, qd_h, a)
-            pred[:, a] = phi @ np.concatenate([r.coefficients[-1, a], r.damping[-1, a]])
-        else:
-            k = quadratic_basis(q_h) @ r.coefficients[-1, a]
-            pred[:, a] = k * q_p[:, a] + r.damping[-1, a, 0] * np.sqrt(np.maximum(k, 0.0)) * qd_h[:, a]
-    return pred
-
-
 def _exp4(rec, method: str, grid: np.ndarray) -> tuple[dict, dict]:
     r = identify_exp4(rec, method=method, grid=grid)
     truth = rec.field.scaled_coefficients
@@ -138,17 +122,21 @@ def _exp4(rec, method: str, grid: np.ndarray) -> tuple[dict, dict]:
         "sqrt_k_error_pct_max": float(np.nanmax(r.sqrt_k_error_pct)),
         "d_hat_error_pct_max": float(np.nanmax(r.d_hat_error_pct)) if method == "linear" else None,
     }
-    return out, {"result": r, "prediction": _prediction(rec, r)}
+    return out, {"result": r, "prediction": r.prediction}
 
 
-def _rls(rec, grid: np.ndarray) -> dict:
-    """Check 7: recursive LS with λ = 1 against cumulative LS, per sequence, over the field."""
+def _rls(rec, exp4, grid: np.ndarray) -> dict:
+    """Check 7: recursive LS with λ = 1 against Exp. 4's cumulative LS, per sequence, over the field.
+
+    ``exp4`` is the :class:`~armlab.estimation.cartesian_identification.Exp4Result` of ``rec``
+    (its ``linear_fits`` are the cumulative LS of Eq. 3.4.1, without a window).
+    """
     tl, m = rec.timeline, rec.logged
     basis = quadratic_basis(grid)
     field_diff, coef_diff, conds = [], [], []
     for a in (0, 1):
         phi, _ = quadratic_field_regressor(tl.q_h[m], tl.q_p[m], tl.qd_h[m], a)
-        c = cumulative_ls(phi, rec.force[m, a], tl.stop[m])
+        c = exp4.linear_fits[a]
         r = recursive_ls(phi, rec.force[m, a], tl.stop[m])
         ok = c.rank == phi.shape[1]
         k_c, k_r = c.theta[ok, :6] @ basis.T, r.theta[ok, :6] @ basis.T
@@ -247,6 +235,7 @@ def estimate_cartesian(trials: TrialSet, ident: IdentificationConfig) -> tuple[d
         "protocol": "cartesian_online",
         "level": str(trials.attrs.get("level", "A")),
         "noise_std_N": {c: r.noise_std_n for c, r in records.items()},
+        "n_stops": {c: r.timeline.n_stops for c, r in records.items()},
         "stiffness_scale": float(field.stiffness_scale),
         "sigma": any_rec.sigma,
         "settings": {
@@ -279,7 +268,8 @@ def estimate_cartesian(trials: TrialSet, ident: IdentificationConfig) -> tuple[d
         for method in methods:
             results[case][method], series[case][method] = _exp4(records[case], method, grid)
     if "exp4" in records:
-        results["rls"] = _rls(records["exp4"], grid)
+        exp4 = next(iter(series["exp4"].values()))["result"]  # any method: both carry the linear fits
+        results["rls"] = _rls(records["exp4"], exp4, grid)
         results["appendix_a"] = _appendix_a(records["exp4"])
     if "exp5" in records:
         results["exp5"], series["exp5"] = _exp5(records["exp5"], ident)
