@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from functools import lru_cache
 from typing import Literal
@@ -33,6 +34,7 @@ from armlab.errors import ConfigError, DataError
 
 __all__ = [
     "bilinear",
+    "by_row_halves",
     "lowpass_noise",
     "butterworth",
     "five_point_derivatives",
@@ -380,18 +382,31 @@ def lowpass_noise(
 _SPLIT_MIN_SIZE = 1 << 20
 
 
+def by_row_halves(fill: Callable[[slice], None], n_rows: int) -> None:
+    """Call ``fill(rows)`` for the first and the second half of ``n_rows`` rows on two threads
+    (one call with every row when there are fewer than 2 rows or cores).
+
+    For work that releases the GIL (NumPy/SciPy array loops, compiled nogil kernels) and computes
+    each row alone: ``fill`` writes its rows of a preallocated output, so the result is
+    bit-identical to one call over every row. An error in either half is raised.
+    """
+    if n_rows < 2 or (os.cpu_count() or 1) < 2:
+        fill(slice(0, n_rows))
+        return
+    half = n_rows // 2
+    with ThreadPoolExecutor(2) as pool:
+        list(pool.map(fill, (slice(0, half), slice(half, None))))
+
+
 def _sosfilt_rows(sos: np.ndarray, x: np.ndarray) -> np.ndarray:
     """``signal.sosfilt(sos, x, axis=1)``, the rows (axis 0) filtered in two blocks on two threads
-    (SciPy releases the GIL while it filters). Every row is filtered alone by the same sections in
-    the same order, so the result is bit-identical to the single call."""
-    if x.shape[0] < 2 or x.size < _SPLIT_MIN_SIZE or (os.cpu_count() or 1) < 2:
+    (:func:`by_row_halves`; SciPy releases the GIL while it filters)."""
+    if x.size < _SPLIT_MIN_SIZE:
         return signal.sosfilt(sos, x, axis=1)
     out = np.empty(x.shape)
-    half = x.shape[0] // 2
 
     def block(rows: slice) -> None:
         out[rows] = signal.sosfilt(sos, x[rows], axis=1)
 
-    with ThreadPoolExecutor(2) as pool:
-        list(pool.map(block, (slice(0, half), slice(half, None))))
+    by_row_halves(block, x.shape[0])
     return out

@@ -16,7 +16,7 @@ from armlab.sim.joint_rig import JointRecording, JointSubject, simulate_joint_ri
 from armlab.sim.lab import (
     LabRecording,
     record_trials,
-    robot_targets,
+    robot_target_paths,
 )
 from armlab.sim.robot_ik import (
     solve_ik,
@@ -40,7 +40,7 @@ __all__ = [
     "SimResult",
     "preload_activations",
     "record_trials",
-    "robot_targets",
+    "robot_target_paths",
     "settle",
     "simulate",
     "solve_ik",

@@ -8,7 +8,6 @@ encoders by forward kinematics, the F/T reading rotated into the shoulder frame)
 
 from __future__ import annotations
 
-import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
@@ -18,6 +17,7 @@ from scipy.interpolate import CubicSpline
 from armlab.config.effects import EffectsConfig, enabled_effects
 from armlab.config.schema import ExperimentConfig
 from armlab.config.subject import SubjectConfig
+from armlab.dsp import by_row_halves
 from armlab.errors import ConfigError
 from armlab.models.ground_truth import GroundTruth, ground_truth
 from armlab.models.robot_fk import RobotKinematics
@@ -38,7 +38,7 @@ __all__ = [
     "LabRecording",
     "PATH_POINTS",
     "record_trials",
-    "robot_targets",
+    "robot_target_paths",
 ]
 
 PATH_POINTS = 41  # IK points along each direction's hand path (spline-interpolated in between)
@@ -83,18 +83,14 @@ def _force_effects(z: np.ndarray, effects: EffectsConfig, fs: float) -> np.ndarr
 
 def _forward_by_halves(fk: RobotKinematics, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``fk.forward(q)`` of (n_trials, n_samples, 7) encoder angles, the two halves of the trials
-    on two threads (the compiled kernel runs without the GIL). Every sample's chain is computed
-    alone by the same operations, so the result is bit-identical to one call."""
-    n = q.shape[0]
-    if n < 2 or (os.cpu_count() or 1) < 2:
-        return fk.forward(q)
+    on two threads (:func:`~armlab.dsp.by_row_halves`; the compiled kernel runs without the GIL).
+    Every sample's chain is computed alone, so the result is bit-identical to one call."""
     contact, rot = np.empty(q.shape[:-1] + (3,)), np.empty(q.shape[:-1] + (3, 3))
 
     def part(rows: slice) -> None:
         contact[rows], rot[rows] = fk.forward(q[rows])
 
-    with ThreadPoolExecutor(2) as pool:
-        list(pool.map(part, (slice(0, n // 2), slice(n // 2, None))))
+    by_row_halves(part, q.shape[0])
     return contact, rot
 
 
@@ -123,11 +119,23 @@ class LabRecording:
     hold: HoldState
 
 
-def _target_paths(
+def robot_target_paths(
     scene: Scene, hold: HoldState, q0: np.ndarray, plan: TrialPlan, directions: np.ndarray, t_rel: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray]:
-    """The robot's joint-target paths of :func:`robot_targets` once per (direction, T_k) pair:
-    ((n_pairs, n_steps, 7) rad, (n_trials,) the pair of each trial)."""
+    """Robot joint targets at every physics step, once per (direction, T_k) pair of the plan.
+
+    The hand path of each direction, x(s) = f(q0 + s dq_f) for s in [0, 1], is solved by IK once
+    on :data:`PATH_POINTS` points and spline-interpolated in s; each pair then evaluates it at
+    s(t) = quintic((t - t_onset) / T_k) (eq. 16), so durations share the path. Trials of the same
+    direction and T_k have the same targets: ``paths[pair_of[i]]`` are trial i's (what
+    ``simulate(..., target_rows=pair_of)`` reads, without a per-trial copy).
+
+    Args:
+        t_rel: (n_steps,) s, time of each physics step relative to the onset.
+
+    Returns:
+        ``paths`` (n_pairs, n_steps, 7) rad and ``pair_of`` (n_trials,) the pair of each trial.
+    """
     s_grid = np.linspace(0.0, 1.0, PATH_POINTS)
     splines = []
     for dq_f in directions:
@@ -143,27 +151,6 @@ def _target_paths(
         s, _, _ = quintic_profile(t_rel, float(t_k))
         table[j] = splines[int(direction)](s)
     return table, np.asarray(which).reshape(-1)
-
-
-def robot_targets(
-    scene: Scene, hold: HoldState, q0: np.ndarray, plan: TrialPlan, directions: np.ndarray, t_rel: np.ndarray
-) -> np.ndarray:
-    """Robot joint targets of every trial at every physics step.
-
-    The hand path of each direction, x(s) = f(q0 + s dq_f) for s in [0, 1], is solved by IK once
-    on :data:`PATH_POINTS` points and spline-interpolated in s; every trial then evaluates it at
-    s(t) = quintic((t - t_onset) / T_k) (eq. 16), so durations share the path. Trials of the same
-    direction and T_k have the same targets: each such pair is evaluated once (the lab's
-    simulation reads them per pair; this function copies them out per trial).
-
-    Args:
-        t_rel: (n_steps,) s, time of each physics step relative to the onset.
-
-    Returns:
-        (n_trials, n_steps, 7) rad.
-    """
-    table, which = _target_paths(scene, hold, q0, plan, directions, t_rel)
-    return table[which]
 
 
 def record_trials(
@@ -221,7 +208,7 @@ def record_trials(
         # step clock; the perturbation starts at sample `onset`, so at (onset + 1) / fs
         t_rel = (np.arange(n_steps) + 1) * dt - (onset + 1) / fs
         q0 = np.asarray(cfg.arm.q0, float)
-        paths, path_of = _target_paths(scene, hold, q0, plan, scenario.directions_rad, t_rel)
+        paths, path_of = robot_target_paths(scene, hold, q0, plan, scenario.directions_rad, t_rel)
         muscle_base = hold.activation
         if active:
             muscle_base = commands(hold.activation, drawing.result(), n_steps, substeps)
