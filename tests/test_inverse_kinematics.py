@@ -7,7 +7,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 import pytest
-from arm5_data import add_marker_noise, markers, random_motion, site_frames
+from arm5_data import add_marker_noise, markers, random_motion, wrist_frames
 from numpy.testing import assert_allclose
 from scipy import optimize
 
@@ -18,7 +18,7 @@ from armlab.models import axis_rotation, limb_kinematics, load_arm_5dof
 ARM = load_arm_5dof()
 KIN = limb_kinematics(ARM)
 Q = random_motion(ARM, np.random.default_rng(21))  # 30 s at 500 Hz
-(WRIST_POS,), (WRIST_ROT,) = (a.transpose(1, 0, *range(2, a.ndim)) for a in site_frames(ARM, Q, ("wrist",)))
+WRIST_POS, WRIST_ROT = wrist_frames(ARM, Q)
 POS, ROT = markers(ARM, Q)
 TORSO, UPPER, FOREARM = 0, 1, 2
 

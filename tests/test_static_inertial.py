@@ -4,10 +4,9 @@ still in 40 configurations), ideal and through a realistic base F/T channel and 
 
 from __future__ import annotations
 
-import mujoco
 import numpy as np
 import pytest
-from arm5_data import MARKER_RATE_HZ, add_marker_noise, site_frames
+from arm5_data import MARKER_RATE_HZ, add_marker_noise, held_wrench, postures, wrist_frames
 from numpy.testing import assert_allclose
 
 from armlab.errors import DataError, EstimationError
@@ -23,11 +22,6 @@ from armlab.sensors import JR3_BASE_FORCE, JR3_BASE_TORQUE, apply_channel
 ARM = load_arm_5dof()
 
 
-def _base_wrench(data: mujoco.MjData) -> np.ndarray:
-    """(6,) the base F/T reading (f N, n N m)."""
-    return np.r_[data.sensordata[ARM.sensors["base_force"]], data.sensordata[ARM.sensors["base_torque"]]]
-
-
 KIN = limb_kinematics(ARM)
 TRUTH = inertial_truth(ARM)
 FT_RATE_HZ = 2000.0  # paper Sec. 3: base JR3 at 2 kHz
@@ -35,20 +29,12 @@ HOLD_S = 1.0  # spec design: hold each configuration 1 s
 
 
 def _configurations(n: int, seed: int) -> np.ndarray:
-    """(n, 5) rad: the default posture +-0.7 rad, inside every joint range (40 predefined
-    configurations of the paper, Sec. 3; their values are not given)."""
-    return ARM.q0 + np.random.default_rng(seed).uniform(-0.7, 0.7, (n, 5))
+    """(n, 5) rad: q0 +- 0.7 rad (the paper's 40 predefined configurations, Sec. 3)."""
+    return postures(ARM, n, seed, 0.7)
 
 
 def _held_wrench(q: np.ndarray) -> np.ndarray:
-    """(n, 6) base wrench (f, n) of the arm held still at each q (MuJoCo's static inverse)."""
-    out = np.empty((len(q), 6))
-    for i, qi in enumerate(q):
-        data = ARM.data_at(qi)
-        data.qacc[:] = 0.0
-        mujoco.mj_inverse(ARM.model, data)
-        out[i] = _base_wrench(data)
-    return out
+    return held_wrench(ARM, q)
 
 
 def test_ideal_data_recover_xi_red():
@@ -91,7 +77,7 @@ def test_realistic_base_sensor_and_markers_predict_gravity_within_0_1_nm():
     # solver starts at the predefined configuration missed by 0.1 rad (the subject's imprecision)
     n_mk = round(HOLD_S * MARKER_RATE_HZ)
     q_rep = np.repeat(fit_q, n_mk, axis=0)
-    (pos,), (rot,) = (a.transpose(1, 0, *range(2, a.ndim)) for a in site_frames(ARM, q_rep, ("wrist",)))
+    pos, rot = wrist_frames(ARM, q_rep)
     pos, rot = add_marker_noise(pos, rot, rng)
     start = np.repeat(fit_q + rng.normal(0.0, 0.1, fit_q.shape), n_mk, axis=0)
     q_ik = inverse_kinematics(KIN, rot, pos, start).q.reshape(40, n_mk, 5).mean(axis=1)

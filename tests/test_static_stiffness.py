@@ -8,6 +8,7 @@ from __future__ import annotations
 import mujoco
 import numpy as np
 import pytest
+from arm5_data import held_still, held_wrench, postures
 from numpy.testing import assert_allclose
 
 from armlab.errors import DataError
@@ -27,11 +28,6 @@ from armlab.models import (
 ARM = load_arm_5dof()
 
 
-def _base_wrench(data: mujoco.MjData) -> np.ndarray:
-    """(6,) the base F/T reading (f N, n N m)."""
-    return np.r_[data.sensordata[ARM.sensors["base_force"]], data.sensordata[ARM.sensors["base_torque"]]]
-
-
 KIN = limb_kinematics(ARM)
 AMPLITUDE_RAD = 0.08  # paper Sec. 3: perturbation amplitude ~0.08 rad
 N_DISTURBANCES = 50  # paper Sec. 4.1: 50 disturbances per K_q
@@ -43,11 +39,9 @@ def _held_external_torque(q: np.ndarray, act: np.ndarray) -> np.ndarray:
     the still arm needs: gravity - passive) less the muscles' share (qfrc_actuator)."""
     out = np.empty((len(q), 5))
     for i, qi in enumerate(q):
-        data = ARM.data_at(qi, act)  # forward pass: qfrc_actuator of the frozen activations
-        muscles = data.qfrc_actuator[ARM.dof].copy()
-        data.qacc[:] = 0.0
-        mujoco.mj_inverse(ARM.model, data)
-        out[i] = data.qfrc_inverse[ARM.dof] - muscles
+        # data_at's forward pass set qfrc_actuator of the frozen activations; mj_inverse keeps it
+        data = held_still(ARM, qi, act)
+        out[i] = data.qfrc_inverse[ARM.dof] - data.qfrc_actuator[ARM.dof]
     return out
 
 
@@ -70,14 +64,8 @@ def _disturbances(seed: int, act: np.ndarray):
 
 
 def _xi_red() -> np.ndarray:
-    q = ARM.q0 + np.random.default_rng(40).uniform(-0.7, 0.7, (40, 5))
-    wrench = np.empty((40, 6))
-    for i, qi in enumerate(q):
-        data = ARM.data_at(qi)
-        data.qacc[:] = 0.0
-        mujoco.mj_inverse(ARM.model, data)
-        wrench[i] = _base_wrench(data)
-    return static_inertial_regression(KIN, q, wrench).xi_red
+    q = postures(ARM, 40, 40, 0.7)  # 40 configurations (paper Sec. 3)
+    return static_inertial_regression(KIN, q, held_wrench(ARM, q)).xi_red
 
 
 XI = _xi_red()
