@@ -15,6 +15,7 @@ from armlab.errors import DataError
 from armlab.estimation import (
     external_joint_torque,
     gravity_torque_from_fit,
+    relative_error,
     static_inertial_regression,
     static_stiffness,
 )
@@ -71,10 +72,6 @@ def _xi_red() -> np.ndarray:
 XI = _xi_red()
 
 
-def _rel(a: np.ndarray, b: np.ndarray) -> float:
-    return float(np.linalg.norm(a - b) / np.linalg.norm(b))
-
-
 @pytest.mark.parametrize("seed", [0, 1])
 def test_ideal_data_recover_the_true_stiffness(seed):
     act = np.random.default_rng(100 + seed).uniform(0.05, 0.3, 12)
@@ -85,9 +82,9 @@ def test_ideal_data_recover_the_true_stiffness(seed):
     est = static_stiffness(q_pre, q_post, t_pre, t_post, g_pre, g_post)
     # linear muscles and exact gravity compensation: exact up to rounding (1e-7); spec check 5
     # allows 5 % (ideal sensors) and asks for an SPD estimate
-    assert _rel(est.K, K_true) < 1e-7
-    assert _rel(est.K_ls, K_true) < 1e-7
-    assert _rel(est.K, K_true) < 0.05 and est.spd.eigenvalues.min() > 0
+    assert relative_error(est.K, K_true) < 1e-7
+    assert relative_error(est.K_ls, K_true) < 1e-7
+    assert relative_error(est.K, K_true) < 0.05 and est.spd.eigenvalues.min() > 0
 
 
 def test_ignoring_gravity_shifts_the_estimate_by_dg_dq():
@@ -101,7 +98,7 @@ def test_ignoring_gravity_shifts_the_estimate_by_dg_dq():
     # spec check 6: the shift equals dG/dq within 10 % (the 0.08 rad steps see G's curvature);
     # compared on the least-squares solutions (the SPD one bends a non-SPD K + dG/dq)
     shift = without.K_ls - with_g.K_ls
-    assert _rel(shift, dG) < 0.10, _rel(shift, dG)
+    assert relative_error(shift, dG) < 0.10, relative_error(shift, dG)
 
 
 def test_standard_errors_match_the_scatter_over_replicates():
