@@ -38,6 +38,37 @@ def site_frames(arm: Arm5Dof, q: np.ndarray, sites: tuple[str, ...]) -> tuple[np
     return pos, rot
 
 
+def wrist_frames(arm: Arm5Dof, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The wrist site's positions (N, 3) m and orientations (N, 3, 3) from MuJoCo's kinematics."""
+    pos, rot = site_frames(arm, q, ("wrist",))
+    return pos[:, 0], rot[:, 0]
+
+
+def postures(arm: Arm5Dof, n: int, seed: int, spread_rad: float) -> np.ndarray:
+    """(n, 5) rad: the default posture q0 +- spread_rad, uniform per joint (inside every joint
+    range for spread_rad <= 0.7; the paper's predefined configurations are not given, Sec. 3)."""
+    return arm.q0 + np.random.default_rng(seed).uniform(-spread_rad, spread_rad, (n, 5))
+
+
+def held_still(arm: Arm5Dof, q: np.ndarray, act: np.ndarray | None = None) -> mujoco.MjData:
+    """MuJoCo data of the arm held still at q (5,) rad with activations act: the static inverse
+    (qvel = qacc = 0; mj_inverse also evaluates the sensors, so the base F/T reads the hold)."""
+    data = arm.data_at(q, act)
+    data.qacc[:] = 0.0
+    mujoco.mj_inverse(arm.model, data)
+    return data
+
+
+def base_wrench(arm: Arm5Dof, data: mujoco.MjData) -> np.ndarray:
+    """(6,) the base F/T reading (f N, n N m) of data."""
+    return np.r_[data.sensordata[arm.sensors["base_force"]], data.sensordata[arm.sensors["base_torque"]]]
+
+
+def held_wrench(arm: Arm5Dof, q: np.ndarray) -> np.ndarray:
+    """(n, 6) the base wrench (f N, n N m) of the passive arm held still at each q (n, 5) rad."""
+    return np.array([base_wrench(arm, held_still(arm, qi)) for qi in q]).reshape(len(q), 6)
+
+
 def markers(arm: Arm5Dof, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Ideal marker positions (N, 3, 3) and orientations (N, 3, 3, 3) in the order of MARKERS."""
     return site_frames(arm, q, MARKERS)

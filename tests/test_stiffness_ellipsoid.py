@@ -25,7 +25,7 @@ def test_compliance_equals_the_settled_displacement_under_a_wrist_force():
     model_g0.opt.gravity[:] = 0.0  # compliance of the muscles alone
     data = mujoco.MjData(model_g0)
     data.qpos[ARM.qpos] = ARM.q0
-    data.act[ARM.muscle_act] = ACT
+    data.act[ARM.muscle_actadr] = ACT
     data.ctrl[ARM.muscle_act] = ACT  # activation dynamics stay at ACT
     mujoco.mj_forward(model_g0, data)
     hold = -(data.qfrc_actuator + data.qfrc_passive)  # cancels the muscles' tone: q0 an equilibrium

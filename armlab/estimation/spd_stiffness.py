@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armlab.errors import DataError, EstimationError
+from armlab.estimation.criteria import symmetric_part
 
 __all__ = [
     "SPDStiffness",
@@ -45,7 +46,7 @@ class SPDStiffness:
 
 def spd_from_pq(P: np.ndarray, Q: np.ndarray) -> np.ndarray:
     """The unique SPD X with X P X = Q (Eqs. (17)-(19)), P and Q SPD (n, n)."""
-    lam_p, u_p = np.linalg.eigh(0.5 * (P + P.T))
+    lam_p, u_p = np.linalg.eigh(symmetric_part(P))
     if lam_p[0] <= 1e-14 * lam_p[-1]:
         raise EstimationError(
             f"P = A^T A is singular (eigenvalues {lam_p[0]:.3g} .. {lam_p[-1]:.3g}): the displacements "
@@ -53,7 +54,7 @@ def spd_from_pq(P: np.ndarray, Q: np.ndarray) -> np.ndarray:
         )
     s_p = np.sqrt(lam_p)
     q_t = (s_p[:, None] * (u_p.T @ Q @ u_p)) * s_p[None, :]
-    lam_q, u_q = np.linalg.eigh(0.5 * (q_t + q_t.T))
+    lam_q, u_q = np.linalg.eigh(symmetric_part(q_t))
     if lam_q[0] <= 1e-14 * lam_q[-1]:
         raise EstimationError(
             f"Q = B^T B is singular (eigenvalues {lam_q[0]:.3g} .. {lam_q[-1]:.3g}): the torque changes "
@@ -62,7 +63,7 @@ def spd_from_pq(P: np.ndarray, Q: np.ndarray) -> np.ndarray:
     mid = (u_q * np.sqrt(lam_q)) @ u_q.T
     left = u_p / s_p
     X = left @ mid @ left.T
-    return 0.5 * (X + X.T)
+    return symmetric_part(X)
 
 
 def chen_mcinroy(A: np.ndarray, B: np.ndarray) -> SPDStiffness:

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armlab.errors import DataError
+from armlab.estimation.criteria import symmetric_part
 
 __all__ = [
     "FIG3_RADIUS_M",
@@ -75,14 +76,14 @@ def stiffness_ellipsoid(
     if not radius > 0:
         raise DataError(f"radius must be positive (m), got {radius!r}")
     try:
-        chol = np.linalg.cholesky(0.5 * (K_q + K_q.T))
+        chol = np.linalg.cholesky(symmetric_part(K_q))
     except np.linalg.LinAlgError:
         raise DataError("K_q is not symmetric positive definite; estimate it with the SPD solver") from None
     jt = J[:3]
     half = np.linalg.solve(chol, jt.T)  # L^{-1} J_t^T, so C_x = half^T half
     C_x = half.T @ half
     K_x = np.linalg.inv(C_x)
-    K_x = 0.5 * (K_x + K_x.T)
+    K_x = symmetric_part(K_x)
     lam, vec = np.linalg.eigh(K_x)
     order = np.argsort(lam)[::-1]
     c = np.zeros(3) if centre is None else np.asarray(centre, dtype=float)

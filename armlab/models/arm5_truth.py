@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import mujoco
 import numpy as np
 
-from armlab.errors import DataError
+from armlab.errors import DataError, ModelError
 from armlab.models.arm_5dof import Arm5Dof, limb_kinematics
 from armlab.models.ground_truth import impedance_fd
 
@@ -139,7 +139,7 @@ def inertial_truth(arm: Arm5Dof) -> InertialTruth:
     fixed = [b for b in sub if not _in_subtree(m, b, upper)]
     moving = [b for b in sub if _in_subtree(m, b, upper)]
     if sorted(moving) != sorted([upper, forearm]):
-        raise DataError("arm_5dof: the arm must be exactly two bodies (upper arm, forearm)")
+        raise ModelError("arm_5dof: the arm must be exactly two bodies (upper arm, forearm)")
     m_fix = float(m.body_mass[fixed].sum())
     s_fix = (m.body_mass[fixed, None] * (data.xipos[fixed] - p_s)).sum(axis=0)
     m_u, m_f = float(m.body_mass[upper]), float(m.body_mass[forearm])

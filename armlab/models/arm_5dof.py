@@ -50,7 +50,8 @@ class Arm5Dof:
     Attributes:
         model: the compiled MjModel; ``path`` its file.
         qpos, dof: (5,) qpos / dof addresses in :data:`ARM5_JOINTS` order.
-        muscle_act: (12,) actuator ids in :data:`ARM5_MUSCLES` order (also their ``act`` indices).
+        muscle_act: (12,) actuator ids in :data:`ARM5_MUSCLES` order.
+        muscle_actadr: (12,) their activation addresses in ``data.act`` (``actuator_actadr``).
         moment_arms: (12, 5) m, r_i: joint torque per newton of muscle tension (= -tendon coef).
         muscle_stiffness, muscle_damping: (12,) N/m, N·s/m per unit activation (k_i, b_i).
         passive_stiffness, passive_damping: (5,) N·m/rad, N·m·s/rad of the joints.
@@ -64,6 +65,7 @@ class Arm5Dof:
     qpos: np.ndarray
     dof: np.ndarray
     muscle_act: np.ndarray
+    muscle_actadr: np.ndarray
     moment_arms: np.ndarray
     muscle_stiffness: np.ndarray
     muscle_damping: np.ndarray
@@ -78,7 +80,7 @@ class Arm5Dof:
         data = mujoco.MjData(self.model)
         data.qpos[self.qpos] = q
         if act is not None:
-            data.act[self.muscle_act] = act
+            data.act[self.muscle_actadr] = act
         mujoco.mj_forward(self.model, data)
         return data
 
@@ -108,6 +110,7 @@ def load_arm_5dof() -> Arm5Dof:
         qpos=qpos,
         dof=model.jnt_dofadr[joints].copy(),
         muscle_act=acts,
+        muscle_actadr=model.actuator_actadr[acts].copy(),
         moment_arms=r,
         muscle_stiffness=-model.actuator_gainprm[acts, 1].copy(),
         muscle_damping=-model.actuator_gainprm[acts, 2].copy(),

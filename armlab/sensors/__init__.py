@@ -6,6 +6,8 @@ from armlab.sensors.presets import (
     CAPSTAN_ENCODER,
     CHANNEL_SPEC_FIELDS,
     JR3_50M31_FORCE,
+    JR3_BASE_FORCE,
+    JR3_BASE_TORQUE,
     JR3_FORCE,
     JR3_TORQUE,
     LWR_ENCODER,
@@ -32,5 +34,7 @@ __all__ = [
     "ADXL203_ACCEL",
     "CAPSTAN_ENCODER",
     "JR3_50M31_FORCE",
+    "JR3_BASE_FORCE",
+    "JR3_BASE_TORQUE",
     "CapstanSensorSuite",
 ]

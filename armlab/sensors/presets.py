@@ -27,6 +27,8 @@ __all__ = [
     "ADXL203_ACCEL",
     "CAPSTAN_ENCODER",
     "JR3_50M31_FORCE",
+    "JR3_BASE_FORCE",
+    "JR3_BASE_TORQUE",
     "DD_ENCODER",
     "JR3_FORCE",
     "JR3_TORQUE",
@@ -126,10 +128,31 @@ JR3_50M31_FORCE = ChannelSpec(
     filter_order=2,
 )
 
+# --- Base JR3 under the seat of the 5-DoF arm lab (seeds/001 Sec. 3) ------------------------------
+# Rated range assumed +-2000 N / +-200 N·m (the subject sits on it: a large-capacity JR3 class;
+# spec Set-up, assumption). Same DSP convention as JR3_FORCE above: full scale at 16384 counts, so
+# one count is 2000/16384 = 0.122 N and 200/16384 = 0.0122 N·m; noise of 3 counts (assumption, as
+# JR3_FORCE's ~4). The offset is not tared (the subject's weight loads it): 2 N / 0.2 N·m std,
+# drawn once per session (assumption); the static regression's intercept absorbs it. No drift and
+# no low-pass: the lab holds each configuration 1 s and averages it (seeds/001 Sec. 4.1), so the
+# filter has no effect on the mean and a drift over 1 s is below one count (assumption).
+JR3_BASE_FORCE = ChannelSpec(
+    noise_std=3 * 2000.0 / 16384,  # N, assumption (3 counts)
+    bias_std=2.0,  # N, assumption (untared offset under the seated subject)
+    quant_step=2000.0 / 16384,  # N, 2000 N full scale / 16384 counts (JR3 DSP, see JR3_FORCE)
+)
+JR3_BASE_TORQUE = ChannelSpec(
+    noise_std=3 * 200.0 / 16384,  # N·m, assumption (3 counts)
+    bias_std=0.2,  # N·m, assumption (same relative size as the force offset)
+    quant_step=200.0 / 16384,  # N·m, 200 N·m full scale / 16384 counts (JR3 DSP, see JR3_FORCE)
+)
+
 SENSOR_PRESETS: dict[str, ChannelSpec] = {
     "capstan_encoder": CAPSTAN_ENCODER,
     "adxl203": ADXL203_ACCEL,
     "jr3_50m31_force": JR3_50M31_FORCE,
+    "jr3_base_force": JR3_BASE_FORCE,
+    "jr3_base_torque": JR3_BASE_TORQUE,
     "jr3_force": JR3_FORCE,
     "jr3_torque": JR3_TORQUE,
     "lwr_encoder": LWR_ENCODER,
