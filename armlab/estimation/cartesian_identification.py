@@ -157,7 +157,7 @@ class Exp3Result:
 
     Attributes:
         theta: (s, 4) estimates after each stop (N/m, N/m², N/m³, N·s/m).
-        truth: (3,) the true ``k_x0, k_x1, k_x3`` (y = 0).
+        truth: (3,) the true ``k_x0, k_x1, k_x3`` (y = 0; k_x0 includes ``k_σ·σ``).
         rank: (s,) regressor rank after each stop.
         sqrt_k: (s,) √K_xx·δ at each stop, N·s/m (the model damping the constant D̂ misses).
     """
@@ -180,7 +180,7 @@ def identify_exp3(record: CartesianRecord) -> Exp3Result:
         raise DataError("Exp. 3's regressor assumes y = 0 along the path (K = k0 + k1 x + k3 x²)")
     phi, _ = quadratic_x_regressor(q_h, q_p, qd_h)
     res = cumulative_ls(phi, f[:, 0], stop)
-    c = record.field.scaled_coefficients[0]
+    c = record.field.coefficients_at(record.sigma)[0]
     pos = record.timeline.stop_position
     return Exp3Result(
         theta=res.theta,
@@ -294,7 +294,7 @@ def identify_exp4(
         coefficients=coef,
         damping=damp,
         rank=rank,
-        field=field_error(coef, record.field, pts),
+        field=field_error(coef, record.field, pts, record.sigma),
         force_nrmse=nrmse,
         prediction=pred,
         linear_fits=(fits[0], fits[1]),

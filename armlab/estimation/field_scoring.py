@@ -58,14 +58,18 @@ class FieldError:
     rms_pct: np.ndarray
 
 
-def field_error(coefficients: np.ndarray, truth: QuadraticImpedanceField, points: np.ndarray) -> FieldError:
+def field_error(
+    coefficients: np.ndarray, truth: QuadraticImpedanceField, points: np.ndarray, sigma: float = 0.0
+) -> FieldError:
     """Score estimated Eq. 2.2.4 coefficients against a true field over ``points``.
 
     Args:
         coefficients: (..., 2, 6) estimated ``k_x0…k_x5`` and ``k_y0…k_y5`` (e.g. one row per
             sequence), N/m per power of m. NaN rows (rank deficient) give NaN scores.
-        truth: the true field (σ = 0).
+        truth: the true field.
         points: (m, 2) m, where to compare.
+        sigma: the co-contraction index in [0, 1] the data were generated at (its ``k_σ·σ`` is
+            part of the true K, Eq. 2.2.4).
 
     Returns:
         The :class:`FieldError`.
@@ -73,7 +77,7 @@ def field_error(coefficients: np.ndarray, truth: QuadraticImpedanceField, points
     c = np.asarray(coefficients, dtype=float)
     if c.shape[-2:] != (2, 6):
         raise ConfigError(f"coefficients must end in (2, 6), got {c.shape}")
-    k_true = truth.stiffness(points)  # (m, 2)
+    k_true = truth.stiffness(points, sigma)  # (m, 2)
     k_hat = np.einsum("mj,...aj->...ma", quadratic_basis(points), c)
     err = relative_error_pct(k_true, k_hat)
     return FieldError(

@@ -36,15 +36,12 @@ class RLSResult:
     Attributes:
         blocks: (b,) block labels in order of arrival.
         theta: (b, p) estimate after each block (NaN while the data is not yet full rank).
-        p_matrix: (b, p, p) the RLS matrix ``P = (λ-weighted Σφφᵀ + P₀⁻¹)⁻¹`` after each block
-            (times the noise variance: the estimate's covariance); NaN while not full rank.
         rank: (b,) numerical rank of the column-scaled factor after each block.
         forgetting: λ.
     """
 
     blocks: np.ndarray
     theta: np.ndarray
-    p_matrix: np.ndarray
     rank: np.ndarray
     forgetting: float
 
@@ -103,7 +100,6 @@ def recursive_ls(
             raise DataError("p0 must be positive definite") from None
         z = r_mat @ (t0 * scale)
     theta_out = np.full((len(labels), n_par), np.nan)
-    p_out = np.full((len(labels), n_par, n_par), np.nan)
     rank = np.zeros(len(labels), dtype=int)
     for k, (a, b) in enumerate(zip(edges[:-1], edges[1:], strict=True)):
         m = b - a
@@ -126,6 +122,4 @@ def recursive_ls(
         if rank[k] < n_par:
             continue
         theta_out[k] = np.linalg.solve(r_mat, z) / scale
-        r_inv = np.linalg.inv(r_mat)
-        p_out[k] = (r_inv @ r_inv.T) / np.outer(scale, scale)
-    return RLSResult(blocks=labels, theta=theta_out, p_matrix=p_out, rank=rank, forgetting=lam)
+    return RLSResult(blocks=labels, theta=theta_out, rank=rank, forgetting=lam)

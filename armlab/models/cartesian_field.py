@@ -89,6 +89,24 @@ class QuadraticImpedanceField:
         """(2, 6) N/m per power of metres: the coefficients times ``stiffness_scale`` (a copy)."""
         return self._c.copy()
 
+    def coefficients_at(self, sigma: float = 0.0) -> np.ndarray:
+        """(2, 6) N/m per power of metres: the Eq. 2.2.4 polynomials of ``K_xx, K_yy`` at one σ.
+
+        ``K_cont = diag(k_σ)·σ`` (Eq. 2.2.4) is constant in q, so it adds ``k_σ·stiffness_scale·σ``
+        to the constant column ``k_0``; at σ = 0 this is :attr:`scaled_coefficients`.
+
+        Args:
+            sigma: co-contraction index in [0, 1].
+
+        Raises:
+            ConfigError: where ``sigma`` lies outside [0, 1].
+        """
+        if not (np.isfinite(sigma) and 0.0 <= sigma <= 1.0):
+            raise ConfigError(f"sigma (co-contraction index) must lie in [0, 1], got {sigma!r}")
+        c = self._c.copy()
+        c[:, 0] += np.asarray(self.k_sigma) * self.stiffness_scale * sigma
+        return c
+
     def scaled(self, stiffness_scale: float) -> QuadraticImpedanceField:
         """The same field with another ``stiffness_scale``."""
         return QuadraticImpedanceField(

@@ -69,12 +69,15 @@ def polynomial_in_new_frame(k: np.ndarray, a: np.ndarray, b: np.ndarray) -> np.n
     )
 
 
-def matrix_field_in_new_frame(field: QuadraticImpedanceField, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+def matrix_field_in_new_frame(
+    field: QuadraticImpedanceField, a: np.ndarray, b: np.ndarray, sigma: float = 0.0
+) -> np.ndarray:
     """The stiffness matrix field seen in the frame ``q* = A q + b``: ``K*(q*) = A K(q) Aᵀ``.
 
     Args:
-        field: the diagonal field (its scaled coefficients are used; co-contraction not included).
+        field: the diagonal field (its coefficients at ``sigma``: ``field.coefficients_at(sigma)``).
         a: (2, 2) an orthogonal frame change (vectors map by ``A``); b: (2,) m.
+        sigma: co-contraction index in [0, 1] (its ``k_σ·σ`` is part of K, Eq. 2.2.4).
 
     Returns:
         (2, 2, 6): entry ``[i, j]`` holds the Eq. 2.2.4-form coefficients of ``K*_ij(q*)``.
@@ -82,7 +85,9 @@ def matrix_field_in_new_frame(field: QuadraticImpedanceField, a: np.ndarray, b: 
     a, b = _affine(a, b)
     if not np.allclose(a @ a.T, np.eye(2), atol=1e-12):
         raise ConfigError("the matrix field transforms as A K Aᵀ only for an orthogonal A (a rotation)")
-    diag_new = polynomial_in_new_frame(field.scaled_coefficients, a, b)  # (2, 6): K_xx*, K_yy* as polynomials
+    diag_new = polynomial_in_new_frame(
+        field.coefficients_at(sigma), a, b
+    )  # (2, 6): K_xx*, K_yy* as polynomials
     return np.einsum("ic,jc,ck->ijk", a, a, diag_new)
 
 

@@ -20,6 +20,7 @@ from armlab.perturbations.quintic import (
     window_durations,
 )
 from armlab.perturbations.ramp_waveforms import (
+    MIN_SAMPLES_PER_SEGMENT,
     TRAPEZOIDAL,
     TRIANGULAR,
     RampWaveform,
@@ -60,6 +61,7 @@ __all__ = [
     "experiment_timeline",
     "stop_path_times",
     "stop_timeline",
+    "MIN_SAMPLES_PER_SEGMENT",
     "TRAPEZOIDAL",
     "TRIANGULAR",
     "RampWaveform",

@@ -219,7 +219,6 @@ def experiment_timeline(
     if experiment not in EXPERIMENTS:
         raise ConfigError(f"unknown experiment {experiment!r}; valid: {', '.join(map(str, EXPERIMENTS))}")
     waveform = ramp_waveform(shape, corner_s)
-    st = stop_path_times(n_stops)
     seq = np.asarray(SEQUENCE_DIRECTIONS)
     if experiment == 1:
         path = table_3_3_path()
@@ -230,4 +229,5 @@ def experiment_timeline(
     else:
         path = spiral_path(spiral_end_fraction) if experiment == 5 else circle_path()
         dirs = [seq] * n_stops
+    st = stop_path_times(n_stops, path.duration_s)  # equal slots of this path's own duration
     return stop_timeline(path, waveform, st, dirs, pause_s=pause_s, fs=fs)

@@ -24,6 +24,7 @@ from armlab.errors import ConfigError
 from armlab.perturbations.quintic import quintic_profile
 
 __all__ = [
+    "MIN_SAMPLES_PER_SEGMENT",
     "Shape",
     "RampWaveform",
     "TRIANGULAR",
@@ -32,6 +33,9 @@ __all__ = [
 ]
 
 Shape = Literal["triangular", "trapezoidal"]
+#: fewest samples per constant-velocity segment a sampled waveform accepts (so each ramp's
+#: velocity is resolved; the thesis's 50 ms trapezoid ramp at 1 kHz has 50)
+MIN_SAMPLES_PER_SEGMENT = 10
 _SHAPES = ("triangular", "trapezoidal")
 
 
@@ -81,6 +85,11 @@ class RampWaveform:
         """m, displacement at the end (0 for both thesis waveforms)."""
         return float(np.dot(self.velocities, self.durations))
 
+    @property
+    def min_fs_hz(self) -> float:
+        """Hz, the lowest rate :meth:`sample` accepts: ``MIN_SAMPLES_PER_SEGMENT`` per shortest segment."""
+        return MIN_SAMPLES_PER_SEGMENT / min(self.durations)
+
     def smoothed(self, corner_s: float) -> RampWaveform:
         """The same segments with corners blended over ``corner_s`` seconds."""
         return RampWaveform(
@@ -128,7 +137,7 @@ class RampWaveform:
         """The waveform sampled at ``fs`` from t = 0 for ``round(duration·fs)`` samples.
 
         Args:
-            fs: Hz, sample rate (> 0; at least 10 samples per shortest segment).
+            fs: Hz, sample rate (>= :attr:`min_fs_hz`).
 
         Returns:
             ``(t, p, v)``: (n,) s, (n,) m, (n,) m/s. For the thesis's 0.4 s triangle at 1 kHz,
@@ -136,10 +145,10 @@ class RampWaveform:
         """
         if not (np.isfinite(fs) and fs > 0):
             raise ConfigError(f"fs must be a positive sample rate in Hz, got {fs!r}")
-        if min(self.durations) * fs < 10:
+        if fs < self.min_fs_hz:
             raise ConfigError(
-                f"fs = {fs:g} Hz gives fewer than 10 samples in the shortest segment "
-                f"({min(self.durations):g} s); use fs >= {10 / min(self.durations):g} Hz"
+                f"fs = {fs:g} Hz gives fewer than {MIN_SAMPLES_PER_SEGMENT} samples in the shortest segment "
+                f"({min(self.durations):g} s); use fs >= {self.min_fs_hz:g} Hz"
             )
         t = np.arange(int(round(self.duration * fs))) / fs
         p, v, _ = self.evaluate(t)

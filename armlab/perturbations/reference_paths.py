@@ -82,9 +82,20 @@ class ReferencePath:
         if not (np.isfinite(self.duration_s) and self.duration_s > 0):
             raise ConfigError(f"duration_s must be positive, got {self.duration_s!r}")
         if not (np.isfinite(self.radius_m) and self.radius_m >= 0 and np.isfinite(self.omega_rad_s)):
-            raise ConfigError("radius_m must be a non-negative number and omega_rad_s finite")
+            raise ConfigError(
+                "radius_m must be a non-negative number and omega_rad_s finite, "
+                f"got radius_m={self.radius_m!r}, omega_rad_s={self.omega_rad_s!r}"
+            )
+        c = np.asarray(self.centre, dtype=float)
+        if c.shape != (2,) or not np.all(np.isfinite(c)):
+            raise ConfigError(f"centre must be two finite numbers (x, y) m, got {self.centre!r}")
         if not (0 < self.end_radius_fraction <= 1):
             raise ConfigError(f"end_radius_fraction must lie in (0, 1], got {self.end_radius_fraction!r}")
+        if self.kind != "spiral" and self.end_radius_fraction != 1:
+            raise ConfigError(
+                f"end_radius_fraction={self.end_radius_fraction!r} is read by kind 'spiral' only; "
+                f"a {self.kind!r} path needs 1"
+            )
         if self.kind == "waypoints":
             w = np.asarray(self.waypoints, dtype=float)
             if w.ndim != 2 or w.shape[1] != 3 or len(w) < 2:

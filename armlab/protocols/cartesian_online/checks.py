@@ -15,6 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from armlab.models.cartesian_field import QuadraticImpedanceField
+from armlab.perturbations.reference_paths import CIRCLE_CENTRE_M
 
 __all__ = [
     "CHECK_NOISE_N",
@@ -27,7 +28,6 @@ __all__ = [
 #: Thesis Tables 3.1/3.2 evaluated at the circle centre (0.95, 0.1) m (spec 002, checked):
 #: K_xx, K_yy N/m and D_xx, D_yy N·s/m
 THESIS_CENTRE = {"K_N_per_m": (16109.5, 22985.8), "D_Ns_per_m": (126.9, 151.6)}
-CENTRE_M = (0.95, 0.1)  # m, thesis §3.2.1
 #: N, the force noise of spec 002's check 6
 CHECK_NOISE_N = 0.05
 #: spec 002 check 6: (sequence, largest field error in %): <= 3 % after 5 sequences, <= 0.1 % after 20
@@ -64,8 +64,8 @@ def acceptance_checks(results: dict, field: QuadraticImpedanceField) -> list[dic
     noise_free = {c: n == 0 for c, n in noise.items()}
     clean = {c: free and stops.get(c, THESIS_STOPS) == THESIS_STOPS for c, free in noise_free.items()}
     s = field.stiffness_scale
-    k = field.stiffness(np.asarray(CENTRE_M))
-    d = field.damping(np.asarray(CENTRE_M))
+    k = field.stiffness(np.asarray(CIRCLE_CENTRE_M))
+    d = field.damping(np.asarray(CIRCLE_CENTRE_M))
     k_ref = np.asarray(THESIS_CENTRE["K_N_per_m"]) * s
     d_ref = np.asarray(THESIS_CENTRE["D_Ns_per_m"]) * np.sqrt(s)
     rows = [

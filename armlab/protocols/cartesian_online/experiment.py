@@ -236,6 +236,7 @@ def records_from_trials(trials: TrialSet, force_channel: str = "hand_force") -> 
         "stop_x",
         "stop_y",
         "n_logged",
+        "path_time_s",
     )
     missing = [k for k in need if k not in trials.trial_meta]
     missing += [k for k in ("hand_vel", "ref_pos", "pert_pos", force_channel) if k not in trials.channels]
@@ -269,7 +270,7 @@ def records_from_trials(trials: TrialSet, force_channel: str = "hand_force") -> 
         timeline = StopTimeline(
             fs=float(trials.fs_hz),
             t=t,
-            s=np.repeat(meta["path_time_s"][rows], n) if "path_time_s" in meta else t,
+            s=np.repeat(meta["path_time_s"][rows], n),
             q_r=q_r,
             qd_r=zeros,
             q_p=q_p,

@@ -43,7 +43,7 @@ def _viz_series(full: dict, results: dict, series: dict) -> dict:
         label = f"Exp. 4 {r.method}, {rec.noise_std_n:g} N, after {len(r.coefficients)} sequences"
         out["k_map"] = {
             "grid": grid,
-            "k_true": field.stiffness(grid),
+            "k_true": field.stiffness(grid, rec.sigma),
             "k_hat": quadratic_basis(grid) @ r.coefficients[-1].T,
             "stops": rec.timeline.stop_position,
             "label": label,
@@ -51,7 +51,7 @@ def _viz_series(full: dict, results: dict, series: dict) -> dict:
         out["force"] = {
             "t": rec.timeline.t[rec.logged],
             "measured": rec.force[rec.logged],
-            "predicted": best["prediction"],
+            "predicted": r.prediction,
             "fs_hz": rec.timeline.fs,
             "label": label,
         }
@@ -65,11 +65,11 @@ def _viz_series(full: dict, results: dict, series: dict) -> dict:
             "t": tl.t,
             "hand": tl.q_h,
             "force": rec.force,
-            "k_true": field.stiffness(tl.stop_position),
+            "k_true": field.stiffness(tl.stop_position, rec.sigma),
         }
         if case in ("exp4", "exp4_noise") and series.get(case):
             r = (series[case].get("linear") or next(iter(series[case].values())))["result"]
-            ends = np.array([tl.t[tl.stop == k].max() for k in range(tl.n_stops)])
+            ends = tl.t[np.r_[np.diff(tl.stop) != 0, True]]  # each stop's last sample
             c["k_hat"] = np.einsum("sj,qaj->qsa", quadratic_basis(tl.stop_position), r.coefficients)
             c["t_after"] = ends
             c["field_error_pct"] = r.field.max_pct
@@ -100,7 +100,7 @@ def reestimate(trials: TrialSet, stored, overrides: list[str]) -> dict:
 def outputs(ctx: OutputContext) -> dict:
     """The checks beside the thesis (table.txt), the figures and the recording."""
     viz, out_dir, cfg = ctx.viz, ctx.out_dir, ctx.cfg
-    written = {"table": write_new(out_dir / "table.txt", viz.format_cartesian_table(ctx.results) + "\n")}
+    written = {"table": write_new(out_dir / "table.txt", format_table(ctx.results, viz) + "\n")}
     if cfg.output.figures:
         written.update(viz.plot_cartesian_figures(ctx.series, ctx.results, out_dir))
     if cfg.output.recording:

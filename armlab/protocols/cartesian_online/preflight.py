@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from armlab.config.schema import SimConfig
 from armlab.errors import ConfigError
-from armlab.perturbations.ramp_waveforms import TRAPEZOIDAL
+from armlab.perturbations.ramp_waveforms import MIN_SAMPLES_PER_SEGMENT, TRAPEZOIDAL, TRIANGULAR
 from armlab.protocols.cartesian_online.config import CartesianOnlineConfig
 
 __all__ = ["validate"]
@@ -30,10 +30,10 @@ def validate(cfg: CartesianOnlineConfig) -> None:
                 "sim.* is not read at simulation.level=A (the thesis's algebraic generator has no physics "
                 "step); valid: leave sim at its defaults"
             )
-    # the trapezoid's 50 ms ramp is the shortest segment (thesis §3.1.1)
-    shortest = min(TRAPEZOIDAL.durations)
-    if cfg.sensors.fs_hz * shortest < 10:
+    # the rule of RampWaveform.sample; the trapezoid's 50 ms ramp is the shortest segment (§3.1.1)
+    need = max(w.min_fs_hz for w in (TRIANGULAR, TRAPEZOIDAL))
+    if cfg.sensors.fs_hz < need:
         raise ConfigError(
-            f"sensors.fs_hz={cfg.sensors.fs_hz:g} Hz gives fewer than 10 samples on the trapezoid's "
-            f"{shortest:g} s ramp; valid: >= {10 / shortest:g} Hz (thesis: 1000 Hz)"
+            f"sensors.fs_hz={cfg.sensors.fs_hz:g} Hz gives fewer than {MIN_SAMPLES_PER_SEGMENT} samples on "
+            f"the waveforms' shortest ramp; valid: >= {need:g} Hz (thesis: 1000 Hz)"
         )

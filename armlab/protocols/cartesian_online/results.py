@@ -65,32 +65,35 @@ _FRAME_ROTATION_RAD, _FRAME_SHIFT_M = 0.4, (-0.3, 0.25)
 _REID_SHIFT_M = (-0.6, 0.35)
 
 
+def _summary(r, keys: tuple[str, ...], maxima: tuple[str, ...]) -> dict:
+    """``keys`` of an Exp. 1/2 result as they are, and ``<name>_max`` (NaN-aware) for ``maxima``.
+
+    A stop without trials gives NaN rows; the largest is taken over the stops that have them.
+    """
+    out = {k: getattr(r, k) for k in keys}
+    out.update({f"{k}_max": float(np.nanmax(getattr(r, k))) for k in maxima})
+    return out
+
+
 def _exp1(rec) -> dict:
-    r = identify_exp1(rec)
-    return {
-        "axis": r.axis,
-        "k_hat": r.k_hat,
-        "d_hat": r.d_hat,
-        "k_true": r.k_true,
-        "k_error_pct": r.k_error_pct,
-        "d_error_pct": r.d_error_pct,
-        "k_error_pct_max": float(r.k_error_pct.max()),
-        "d_error_pct_max": float(r.d_error_pct.max()),
-    }
+    return _summary(
+        identify_exp1(rec),
+        ("axis", "k_hat", "d_hat", "k_true", "k_error_pct", "d_error_pct"),
+        ("k_error_pct", "d_error_pct"),
+    )
 
 
 def _exp2(rec) -> dict:
-    r = identify_exp2(rec)
-    return {
-        "k_hat": r.k_hat,
-        "d_hat": r.d_hat,
-        "k_true": r.k_true,
-        "d_true": r.d_true,
-        "diagonal_error_pct_max": float(r.diagonal_error_pct.max()),
-        "coupling_pct_max": float(r.coupling_pct.max()),
-        "row_coupling_pct_max": float(r.row_coupling_pct.max()),
-        "d_error_pct_max": float(r.d_error_pct.max()),
-    }
+    return _summary(
+        identify_exp2(rec),
+        ("k_hat", "d_hat", "k_true", "d_true"),
+        ("diagonal_error_pct", "coupling_pct", "row_coupling_pct", "d_error_pct"),
+    )
+
+
+def _nanptp(x: np.ndarray) -> float:
+    """Peak to peak over the finite values (a stop without trials is NaN)."""
+    return float(np.nanmax(x) - np.nanmin(x))
 
 
 def _exp3(rec) -> dict:
@@ -102,14 +105,15 @@ def _exp3(rec) -> dict:
         "rank": r.rank,
         "coefficient_error_pct": r.coefficient_error_pct,
         "final_error_pct_max": float(r.coefficient_error_pct[-1].max()),
-        "d_hat_variation_pct": float(100 * np.ptp(late) / late.mean()),  # over the second half of stops
-        "sqrt_k_variation_pct": float(100 * np.ptp(r.sqrt_k) / r.sqrt_k.mean()),
+        # over the second half of stops; NaN-aware: a stop without trials has no estimate
+        "d_hat_variation_pct": float(100 * _nanptp(late) / np.nanmean(late)),
+        "sqrt_k_variation_pct": float(100 * _nanptp(r.sqrt_k) / np.nanmean(r.sqrt_k)),
     }
 
 
 def _exp4(rec, method: str, grid: np.ndarray) -> tuple[dict, dict]:
     r = identify_exp4(rec, method=method, grid=grid)
-    truth = rec.field.scaled_coefficients
+    truth = rec.field.coefficients_at(rec.sigma)  # Eq. 2.2.4 with K_cont = k_σ·σ
     rel = np.abs(r.coefficients / truth - 1).reshape(len(r.coefficients), -1).max(axis=1)
     out = {
         "field_max_pct": r.field.max_pct,
@@ -122,7 +126,7 @@ def _exp4(rec, method: str, grid: np.ndarray) -> tuple[dict, dict]:
         "sqrt_k_error_pct_max": float(np.nanmax(r.sqrt_k_error_pct)),
         "d_hat_error_pct_max": float(np.nanmax(r.d_hat_error_pct)) if method == "linear" else None,
     }
-    return out, {"result": r, "prediction": r.prediction}
+    return out, {"result": r}
 
 
 def _rls(rec, exp4, grid: np.ndarray) -> dict:
@@ -170,7 +174,7 @@ def _orders(positions: np.ndarray, k: np.ndarray, d: np.ndarray, ident: Identifi
     return out
 
 
-def _exp5(rec, ident: IdentificationConfig) -> tuple[dict, dict]:
+def _exp5(rec, ident: IdentificationConfig) -> dict:
     r = identify_exp5(rec, origin=tuple(ident.polar_origin_m))
     cart = _orders(r.positions, r.k_cart, r.d_cart, ident)
     polar = _orders(r.polar_positions, r.k_pol, r.d_pol, ident)
@@ -186,22 +190,25 @@ def _exp5(rec, ident: IdentificationConfig) -> tuple[dict, dict]:
         "thesis_orders": {k: {e: list(o) for e, o in v.items()} for k, v in THESIS_ORDERS.items()},
         "origin_m": list(r.origin),
     }
-    return out, {"result": r}
+    return out
 
 
 def _appendix_a(rec) -> dict:
     """Check 9: the frame change of Appendix A on the field, and re-identification after a shift."""
     tl, m = rec.timeline, rec.logged
-    field = rec.field
+    field, sigma = rec.field, rec.sigma
+    coef = field.coefficients_at(sigma)  # Eq. 2.2.4 with K_cont = k_σ·σ: the K the data carry
     a, b = rotation(_FRAME_ROTATION_RAD), np.asarray(_FRAME_SHIFT_M)
     q = tl.stop_position
-    k_new = polynomial_in_new_frame(field.scaled_coefficients, a, b)
-    scalar = np.max(np.abs(quadratic_basis(q @ a.T + b) @ k_new.T / field.stiffness(q) - 1))
-    km = evaluate_matrix_field(matrix_field_in_new_frame(field, a, b), q @ a.T + b)
-    truth = np.einsum("ic,nc,jc->nij", a, field.stiffness(q), a)
+    q = q[np.all(np.isfinite(q), axis=1)]  # a stop without trials has no position
+    k_q = field.stiffness(q, sigma)
+    k_new = polynomial_in_new_frame(coef, a, b)
+    scalar = np.max(np.abs(quadratic_basis(q @ a.T + b) @ k_new.T / k_q - 1))
+    km = evaluate_matrix_field(matrix_field_in_new_frame(field, a, b, sigma), q @ a.T + b)
+    truth = np.einsum("ic,nc,jc->nij", a, k_q, a)
     matrix = np.max(np.abs(km - truth)) / np.abs(truth).max()
     shift = np.asarray(_REID_SHIFT_M)
-    k_shift = polynomial_in_new_frame(field.scaled_coefficients, np.eye(2), shift)
+    k_shift = polynomial_in_new_frame(coef, np.eye(2), shift)
     reid = []
     for ax in (0, 1):
         fit = fit_sqrt_damping_field(tl.q_h[m] + shift, tl.q_p[m], tl.qd_h[m], rec.force[m, ax], ax)
@@ -272,6 +279,6 @@ def estimate_cartesian(trials: TrialSet, ident: IdentificationConfig) -> tuple[d
         results["rls"] = _rls(records["exp4"], exp4, grid)
         results["appendix_a"] = _appendix_a(records["exp4"])
     if "exp5" in records:
-        results["exp5"], series["exp5"] = _exp5(records["exp5"], ident)
+        results["exp5"] = _exp5(records["exp5"], ident)
     results["checks"] = acceptance_checks(results, field)
     return results, series
