@@ -183,3 +183,77 @@ def test_target_rows_outside_the_paths_are_refused(lab, rows):
             substeps=SUBSTEPS,
             target_rows=rows,
         )
+
+
+def test_first_bad_step_finds_a_non_finite_state_and_a_clock_that_jumped():
+    from armlab.sim._chunk_kernel import first_bad_step
+
+    dt, n, m = 5e-4, 3, 4
+    time_in = np.array([0.1, 0.2, 0.3])
+    states = np.zeros((n, m, 5))
+    states[..., 0] = time_in[:, None] + dt * np.arange(1, m + 1)
+    assert first_bad_step(time_in, states, dt) == -1
+    bad = states.copy()
+    bad[2, 1, 3] = np.nan
+    assert first_bad_step(time_in, bad, dt) == 2 * m + 1
+    bad[1, 3, 4] = np.inf
+    assert first_bad_step(time_in, bad, dt) == 1 * m + 3
+    reset = states.copy()
+    reset[0, 2, 0] = 0.0  # MuJoCo reset trial 0's state: its clock starts again
+    assert first_bad_step(time_in, reset, dt) == 2
+    late = states.copy()
+    late[1, 0, 0] += 0.6 * dt  # more than half a step off the clock
+    assert first_bad_step(time_in, late, dt) == m
+
+
+@pytest.mark.parametrize("base_shape", [(1, 1, 6), (3, 1, 6), (3, 30, 6)])
+def test_compiled_reflex_commands_equal_reflex_command_bit_for_bit(base_shape):
+    # the kernel reads a ring of the last steps (step j in row j % depth) and the steady state before
+    # step 0; reflex_command reads the same values gathered into arrays. Random stretch of both signs,
+    # a base that makes some commands clip at 0 and 1, chunks before, across and after step 0's lags.
+    from armlab.sim._chunk_kernel import muscle_commands, store_history
+    from armlab.sim.rollout import REFLEX_LENGTH_SCALE_M, reflex_command
+
+    rng = np.random.default_rng(5)
+    n, n_steps, lag_s, lag_sp = 3, 30, 4, 9
+    reflex = ReflexConfig(stretch_gain=0.7, velocity_gain=0.03, spinal_gain=0.4)
+    ref = 0.1 + 0.01 * rng.random(6)
+    lengths = ref + 0.02 * rng.standard_normal((n, n_steps, 6))
+    velocities = 0.5 * rng.standard_normal((n, n_steps, 6))
+    base = rng.uniform(-0.1, 1.1, base_shape)
+    ring = np.empty((n, lag_sp + lag_s, 12))
+    cols = np.array([7, 1, 3, 0, 5, 2])  # muscle actuators' columns of ctrl, in muscle order
+
+    def lagged(x, t, lag, before):
+        return np.where((t - lag >= 0)[None, :, None], x[:, np.maximum(t - lag, 0)], before)
+
+    for c0 in range(0, n_steps, lag_s):
+        t = np.arange(c0, min(n_steps, c0 + lag_s))
+        ctrl = np.full((n, t.size, 8), -1.0)
+        muscle_commands(
+            ctrl,
+            cols,
+            base,
+            c0,
+            ring,
+            lag_s,
+            lag_sp,
+            ref,
+            REFLEX_LENGTH_SCALE_M,
+            reflex.stretch_gain,
+            reflex.velocity_gain,
+            reflex.spinal_gain,
+        )
+        b = base[:, t] if base_shape[1] > 1 else base
+        expected = reflex_command(
+            b,
+            np.stack([lagged(lengths, t, lag, ref) for lag in (lag_s, lag_sp)]),
+            np.stack([lagged(velocities, t, lag, 0.0) for lag in (lag_s, lag_sp)]),
+            ref,
+            reflex,
+        )
+        assert_array_equal(ctrl[:, :, cols], np.broadcast_to(expected, (n, t.size, 6)))
+        assert np.all(np.delete(ctrl, cols, axis=2) == -1.0)  # the other actuators untouched
+        sd = np.concatenate([lengths[:, t], velocities[:, t]], axis=2)  # this chunk's "sensordata"
+        store_history(ring, sd, np.arange(12), c0)
+    assert np.any(expected == 0.0) or np.any(expected == 1.0)  # the clip was exercised

@@ -9,6 +9,7 @@ import mujoco
 import numpy as np
 import pytest
 from contact_check import assert_contacts_off_changes_nothing
+from numpy.testing import assert_array_equal
 
 from armlab.config.schema import ArmConfig
 from armlab.errors import ConfigError, ModelError
@@ -117,3 +118,19 @@ def test_lab_scene_skips_collision_detection_and_no_trajectory_changes(rigid):
         data.ctrl[scene.robot_act] = 0.1
 
     assert_contacts_off_changes_nothing(scene, perturbed_hold, 1000)
+
+
+def test_sensors_side_by_side_are_a_view_where_they_lie_in_order(lab):
+    scene = lab.scene
+    sd = np.arange(3 * scene.model.nsensordata, dtype=float).reshape(3, -1)
+    names = [f"lwr_q{i}" for i in range(1, 8)]
+    joined = np.concatenate([scene.sensor(sd, n) for n in names], axis=-1)
+    view = scene.sensors_of(sd, names)
+    assert_array_equal(view, joined)
+    assert np.shares_memory(view, sd)  # no copy of a large record
+    shuffled = ["lwr_q3", "lwr_q1", "ft_force"]  # not one after the other: a new array, same values
+    copy = scene.sensors_of(sd, shuffled)
+    assert_array_equal(copy, np.concatenate([scene.sensor(sd, n) for n in shuffled], axis=-1))
+    assert not np.shares_memory(copy, sd)
+    with pytest.raises(ModelError, match="no sensor 'lwr_q9'"):
+        scene.sensors_of(sd, ["lwr_q1", "lwr_q9"])

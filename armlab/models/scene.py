@@ -8,6 +8,7 @@ belts), the LWR-class robot on its own base, the F/T sensor and cuff on the robo
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -98,6 +99,15 @@ class Scene:
             return sensordata[..., self.sensors[name]]
         except KeyError:
             raise ModelError(f"scene has no sensor {name!r}; available: {sorted(self.sensors)}") from None
+
+    def sensors_of(self, sensordata: np.ndarray, names: Sequence[str]) -> np.ndarray:
+        """The named sensors side by side, ``(..., total dim)``: a view of ``sensordata`` when they
+        lie one after the other in it (no copy of a large record), else a new array."""
+        parts = [self.sensor(sensordata, n) for n in names]  # checks every name
+        spans = [self.sensors[n] for n in names]
+        if all(a.stop == b.start for a, b in zip(spans, spans[1:], strict=False)):
+            return sensordata[..., spans[0].start : spans[-1].stop]
+        return np.concatenate(parts, axis=-1)
 
 
 def _compose(arm: ArmConfig, cuff: CuffConfig, robot: RobotConfig, sim: SimConfig) -> mjcf.RootElement:

@@ -22,6 +22,7 @@ from armlab.data.rundir import require_complete
 from armlab.errors import ConfigError, DataError
 from armlab.protocols import registry
 from armlab.protocols._files import check_new_dir, new_dir, write_json, write_new
+from armlab.runner.memory import small_pages
 
 __all__ = [
     "run_benchmark",
@@ -30,6 +31,7 @@ __all__ = [
 ]
 
 
+@small_pages()  # no page-fault stalls in its large arrays (armlab.runner.memory)
 def run_diagnoser(
     data: Path, protocol: str, cfg: DiagnosisConfig, units: str | None = None
 ) -> tuple[dict, dict]:
@@ -54,6 +56,7 @@ def run_diagnoser(
     return results, series
 
 
+@small_pages()
 def run_diagnosis(
     data: Path,
     protocol: str,
@@ -114,6 +117,7 @@ def _case(cls: str, rep: int, ref: RefereeConfig, diag_cfg: DiagnosisConfig, roo
     return {**score, "replicate": rep, "enr": ds.enr, "seconds": seconds, "truth": ds.truth}
 
 
+@small_pages()
 def run_benchmark(overrides: list[str] | None, out_dir: Path) -> tuple[Path, dict]:
     """Run the referee: make, diagnose and score every (class, replicate); write the summary."""
     from joblib import Parallel, delayed

@@ -36,6 +36,7 @@ from armlab.protocols import registry
 from armlab.protocols._files import check_new_dir, new_dir, write_json, write_new
 from armlab.protocols.base import OutputContext
 from armlab.protocols.compose import check_effects
+from armlab.runner.memory import small_pages
 
 __all__ = [
     "format_table",
@@ -72,8 +73,9 @@ def _run(cfg: ExperimentConfig, out_dir: Path, config_yaml: str, timing: dict) -
 
     protocol = registry.get(cfg.protocol_name, need="run")
     check_effects(protocol, cfg)
-    # One background thread: rerun is imported while the protocol simulates (when the run records),
-    # then the trial file is compressed (HDF5's deflate runs without the GIL) from the end of the
+    # One background thread: rerun is imported once the protocol has simulated (when the run
+    # records; not during the simulation, whose rollout keeps both cores busy), then the trial file
+    # is compressed (HDF5's deflate runs without the GIL) from the end of the
     # simulation on, while the protocol estimates and then draws its figures and recording;
     # leaving the block waits for it, so the file is complete (or its error raised) before
     # results.json can mark the run complete; a failed estimation still leaves the complete trial
@@ -83,12 +85,12 @@ def _run(cfg: ExperimentConfig, out_dir: Path, config_yaml: str, timing: dict) -
     frozen: list[np.ndarray] = []
     try:
         with ThreadPoolExecutor(max_workers=1) as background:
-            if cfg.output.recording:
-                background.submit(viz.preload_rerun)
             t0 = time.perf_counter()
             progress.stage("simulate")  # each stage's size, where known, comes from the computation
             sim = protocol.simulate(cfg)
             timing["simulate_s"] = time.perf_counter() - t0
+            if cfg.output.recording:
+                background.submit(viz.preload_rerun)
             trials = sim.trials
             saving = None
             if cfg.output.trials:
@@ -142,13 +144,15 @@ def run_protocol(cfg: ExperimentConfig, out_dir: Path, config_yaml: str = "") ->
         )
     timing: dict = {}
     t0 = time.perf_counter()
-    results = _run(cfg, out_dir, config_yaml, timing)
+    with small_pages():  # no page-fault stalls in the run's large arrays (armlab.runner.memory)
+        results = _run(cfg, out_dir, config_yaml, timing)
     timing["total_s"] = time.perf_counter() - t0
     results["timing"] = timing
     write_json(out_dir / MARKER, results)  # last: it marks the run complete (armlab.data.rundir)
     return results
 
 
+@small_pages()  # no page-fault stalls in its large arrays (armlab.runner.memory)
 def reestimate(
     run_dir: Path, overrides: list[str] | None = None, out: Path | None = None
 ) -> tuple[Path, dict]:

@@ -241,40 +241,32 @@ def record_trials(
         "no arm perturbation applies it; valid runs stay below 50 N",
     )
 
-    def true_channels() -> dict[str, np.ndarray]:  # noiseless channels: copies out of the sensor data
-        return {
-            "true_arm_q": sim.qpos[..., scene.arm_qpos],
-            "true_hand_pos": (scene.sensor(sd, "p_hand") - scene.shoulder_pos)[..., :2],
-            "true_activation": sim.activation,
-            "true_arm_points": np.concatenate(
-                [scene.sensor(sd, f"p_{s}") for s in ("shoulder_site", "elbow_site", "hand")], axis=-1
-            ),
-            "true_robot_points": np.concatenate(
-                [scene.sensor(sd, f"p_{b}") for b in ROBOT_POINTS] + [scene.sensor(sd, "p_flange")],
-                axis=-1,
-            ),
-        }
-
-    # the noiseless channels are copied out on a second thread while the sensors are modelled
-    with ThreadPoolExecutor(max_workers=1) as beside:
-        true = beside.submit(true_channels)
-        clean = {
-            "robot_q": np.concatenate([scene.sensor(sd, f"lwr_q{i}") for i in range(1, 8)], axis=-1),
-            "robot_tau": np.concatenate([scene.sensor(sd, f"lwr_tau{i}") for i in range(1, 8)], axis=-1),
-            "ft_force": _force_effects(scene.sensor(sd, "ft_force"), cfg.effects, fs),
-            "ft_torque": _force_effects(scene.sensor(sd, "ft_torque"), cfg.effects, fs),
-        }
-        suite = SensorSuite.realistic() if cfg.sensors.preset == "realistic" else SensorSuite.ideal()
-        # drift accumulates from taring, before the random wait
-        measured = measure(clean, suite, fs, rng, t0_s=plan.wait_s)
-        if cfg.effects.force_sensor_noise is not None:  # extra white noise, N, after the sensor suite
-            measured["ft_force"] = measured["ft_force"] + rng.normal(
-                0.0, cfg.effects.force_sensor_noise.std, measured["ft_force"].shape
-            )
-        contact, ft_rot = _forward_by_halves(kinematics, measured["robot_q"])
-        hand_pos = (contact - scene.shoulder_pos)[..., :2]
-        hand_force = np.einsum("...ij,...j->...i", ft_rot, measured["ft_force"])[..., :2]
-        channels = {"hand_pos": hand_pos, "hand_force": hand_force, **measured, **true.result()}
+    # the noiseless channels and the sensors' inputs: views of the sensor data where the sensors lie
+    # side by side in it (Scene.sensors_of), no copies
+    true = {
+        "true_arm_q": sim.qpos[..., scene.arm_qpos],
+        "true_hand_pos": (scene.sensor(sd, "p_hand") - scene.shoulder_pos)[..., :2],
+        "true_activation": sim.activation,
+        "true_arm_points": scene.sensors_of(sd, [f"p_{s}" for s in ("shoulder_site", "elbow_site", "hand")]),
+        "true_robot_points": scene.sensors_of(sd, [f"p_{b}" for b in ROBOT_POINTS] + ["p_flange"]),
+    }
+    clean = {
+        "robot_q": scene.sensors_of(sd, [f"lwr_q{i}" for i in range(1, 8)]),
+        "robot_tau": scene.sensors_of(sd, [f"lwr_tau{i}" for i in range(1, 8)]),
+        "ft_force": _force_effects(scene.sensor(sd, "ft_force"), cfg.effects, fs),
+        "ft_torque": _force_effects(scene.sensor(sd, "ft_torque"), cfg.effects, fs),
+    }
+    suite = SensorSuite.realistic() if cfg.sensors.preset == "realistic" else SensorSuite.ideal()
+    # drift accumulates from taring, before the random wait
+    measured = measure(clean, suite, fs, rng, t0_s=plan.wait_s)
+    if cfg.effects.force_sensor_noise is not None:  # extra white noise, N, after the sensor suite
+        measured["ft_force"] = measured["ft_force"] + rng.normal(
+            0.0, cfg.effects.force_sensor_noise.std, measured["ft_force"].shape
+        )
+    contact, ft_rot = _forward_by_halves(kinematics, measured["robot_q"])
+    hand_pos = (contact - scene.shoulder_pos)[..., :2]
+    hand_force = np.einsum("...ij,...j->...i", ft_rot, measured["ft_force"])[..., :2]
+    channels = {"hand_pos": hand_pos, "hand_force": hand_force, **measured, **true}
     units = {
         "hand_pos": "m",
         "hand_force": "N",

@@ -3,7 +3,8 @@
 MuJoCo steps every trial of a run in one threaded ``rollout`` call per chunk. The reflex is a
 feedback from muscle stretch to activation with latency >= ``stretch_latency_s`` (paper II-B,
 Fig. 1), so the control of a chunk no longer than that latency depends only on states already
-simulated: between chunks, NumPy computes the next chunk's muscle commands for all trials at once.
+simulated: between chunks, compiled loops (:mod:`armlab.sim._chunk_kernel`) compute the next
+chunk's muscle commands for all trials at once.
 This is exact (no approximation of the delay) and keeps Python out of the per-step loop.
 """
 
@@ -21,6 +22,7 @@ from armlab import progress
 from armlab.config.schema import ReflexConfig
 from armlab.errors import SimulationError
 from armlab.models.scene import MUSCLES, Scene
+from armlab.sim import _chunk_kernel as kernel
 from armlab.sim.stability import TrialLabels, check_rollout, warning_counts
 
 __all__ = [
@@ -110,17 +112,6 @@ def _as_slice(cols: np.ndarray) -> slice | np.ndarray:
     return cols
 
 
-def _lagged(hist: np.ndarray, c0: int, c1: int, lag: int, before) -> np.ndarray:
-    """``hist[:, c0 - lag : c1 - lag]`` (n_trials, c1 - c0, k), ``before`` where the index is < 0
-    (the steady state before the first step)."""
-    n, _, k = hist.shape
-    out = np.empty((n, c1 - c0, k))
-    lead = min(c1 - c0, max(0, lag - c0))
-    out[:, :lead] = before
-    out[:, lead:] = hist[:, c0 + lead - lag : c1 - lag]
-    return out
-
-
 def simulate(
     scene: Scene,
     initial_state: np.ndarray,
@@ -208,15 +199,16 @@ def simulate(
     nstate = mujoco.mj_stateSize(model, spec)
     act_cols = 1 + model.nq + model.nv + model.actuator_actadr[scene.muscle_act]  # activations' places
     # consecutive columns as slices: the chunks' copies read them without a fancy-index gather
-    act_cols, len_cols, vel_cols = (_as_slice(c) for c in (act_cols, len_sl, vel_sl))
+    act_cols = _as_slice(act_cols)
     n_samples = n_steps // substeps
     sensordata = np.empty((n_trials, n_samples, nsd))
     activation = np.empty((n_trials, n_samples, len(MUSCLES)))
     muscle_ctrl = np.empty((n_trials, n_samples, len(MUSCLES)))
     qpos = np.empty((n_trials, n_samples, model.nq))
-    # full-rate muscle length/velocity history for the reflex (steady state before t = 0)
-    hist_len = np.empty((n_trials, n_steps, len(MUSCLES)))
-    hist_vel = np.empty_like(hist_len)
+    # the muscle lengths then velocities of the last steps, as far back as the longest reflex lag
+    # reads (step j in row j % depth; the steady state before t = 0 is the kernel's)
+    hist = np.empty((n_trials, lag_sp + chunk if reflex.enabled else 0, 2 * len(MUSCLES)))
+    hist_cols = np.r_[len_sl, vel_sl].astype(np.intp)
 
     # Two sets of buffers, reused chunk after chunk: the rollout writes into one while the other
     # chunk's outputs are checked and kept (no allocation, no page faults per chunk); the inputs
@@ -227,15 +219,21 @@ def simulate(
         raise SimulationError(f"initial_state must hold {nstate} full-physics values, got {state.shape[1]}")
     models = [model] * n_trials  # the unchecked call takes one model per trial
     starts = range(0, n_steps, chunk)
+    robot_cols = np.asarray(scene.robot_act, dtype=np.intp)
+    muscle_cols = np.asarray(scene.muscle_act, dtype=np.intp)
+    rows = np.arange(n_trials) if isinstance(target_rows, slice) else target_rows.astype(np.intp)
+    table = np.ascontiguousarray(robot_targets, dtype=float)
+    base3 = muscle_base if per_step else muscle_base.reshape(1, 1, -1)
 
     def robot_ctrl(j: int) -> None:  # the robot's part of chunk j's controls (known in advance)
         c0 = starts[j]
         c1 = min(n_steps, c0 + chunk)
-        bufs.get(c1 - c0, j % 2)[0][:, :, scene.robot_act] = robot_targets[target_rows, c0:c1]
+        kernel.robot_targets(bufs.get(c1 - c0, j % 2)[0], robot_cols, table, rows, c0)
 
-    def keep(c0: int, c1: int, state_in, states, sd, u, warned) -> None:
+    def keep(c0: int, c1: int, state_in, states, sd, ctrl, warned) -> None:
         """Check chunk [c0, c1) and keep its samples (while the next chunk steps)."""
-        check_rollout(who, state_in, states, data, dt, np.arange(c0 + 1, c1 + 1) * dt, warned=warned)
+        if warned or kernel.first_bad_step(state_in[:, 0], states, dt) >= 0:  # it raises, naming the trial
+            check_rollout(who, state_in, states, data, dt, np.arange(c0 + 1, c1 + 1) * dt, warned=warned)
         # keep the samples whose last physics step falls in this chunk: steps c0 + o,
         # c0 + o + substeps, ... (step s ends sample (s + 1) / substeps - 1)
         o = (substeps - 1 - c0) % substeps
@@ -244,7 +242,7 @@ def simulate(
         kept = slice(o, o + (s1 - s0) * substeps, substeps)
         sensordata[:, s0:s1] = sd[:, kept]
         activation[:, s0:s1] = states[:, kept, act_cols]
-        muscle_ctrl[:, s0:s1] = u[:, kept]
+        muscle_ctrl[:, s0:s1] = ctrl[:, kept, muscle_cols]
         qpos[:, s0:s1] = states[:, kept, 1 : 1 + model.nq]
         progress.advance(n_trials * c1 / n_steps - n_trials * c0 / n_steps)
 
@@ -262,18 +260,23 @@ def simulate(
             c1 = min(n_steps, c0 + chunk)
             m = c1 - c0
             ctrl, states, sd = bufs.get(m, j % 2)
-            base = muscle_base[:, c0:c1] if per_step else muscle_base
             if reflex.enabled:  # stretch lagged by >= one chunk: only chunks already stepped
-                u = reflex_command(
-                    base,
-                    np.stack([_lagged(hist_len, c0, c1, lag, ref_len) for lag in (lag_s, lag_sp)]),
-                    np.stack([_lagged(hist_vel, c0, c1, lag, 0.0) for lag in (lag_s, lag_sp)]),
+                kernel.muscle_commands(
+                    ctrl,
+                    muscle_cols,
+                    base3,
+                    c0,
+                    hist,
+                    lag_s,
+                    lag_sp,
                     ref_len,
-                    reflex,
+                    REFLEX_LENGTH_SCALE_M,
+                    reflex.stretch_gain,
+                    reflex.velocity_gain,
+                    reflex.spinal_gain,
                 )
             else:
-                u = np.broadcast_to(base, (n_trials, m, len(MUSCLES)))
-            ctrl[:, :, scene.muscle_act] = u
+                ctrl[:, :, muscle_cols] = muscle_base[:, c0:c1] if per_step else muscle_base
             step_args = dict(nstep=m, state=states, sensordata=sd, skip_checks=True)
             stepping = stepper.submit(runner.rollout, models, data, state, ctrl, **step_args)
             try:
@@ -286,9 +289,9 @@ def simulate(
                 wait([stepping])  # never leave a rollout writing into the buffers while raising
             stepping.result()
             warned = warning_counts(data)  # the next rollout call clears the counters
-            hist_len[:, c0:c1] = sd[:, :, len_cols]
-            hist_vel[:, c0:c1] = sd[:, :, vel_cols]
-            pending = (c0, c1, state, states, sd, u, warned)
+            if reflex.enabled:
+                kernel.store_history(hist, sd, hist_cols, c0)
+            pending = (c0, c1, state, states, sd, ctrl, warned)
             state = np.ascontiguousarray(states[:, -1])  # a copy: the buffer is reused
         if pending is not None:
             keep(*pending)
