@@ -257,3 +257,23 @@ def test_compiled_reflex_commands_equal_reflex_command_bit_for_bit(base_shape):
         sd = np.concatenate([lengths[:, t], velocities[:, t]], axis=2)  # this chunk's "sensordata"
         store_history(ring, sd, np.arange(12), c0)
     assert np.any(expected == 0.0) or np.any(expected == 1.0)  # the clip was exercised
+
+
+def test_the_preload_loads_every_kernel_in_the_types_the_simulation_passes(lab):
+    # Protocol.preload (armlab.sim.lab.load_compiled) is only worth its thread if the simulation
+    # then finds its kernels ready: it must not need another compiled signature
+    from armlab.models import _fk_kernel
+    from armlab.models.robot_fk import RobotKinematics
+    from armlab.sim import _chunk_kernel
+    from armlab.sim.lab import load_compiled
+
+    kernels = [getattr(_chunk_kernel, n) for n in _chunk_kernel.__all__ if n != "load"] + [_fk_kernel.chain]
+    load_compiled()
+    loaded = [list(k.signatures) for k in kernels]
+    assert all(loaded)
+    res = simulate(
+        lab.scene, lab.hold.state, _ramped_targets(lab), lab.hold.activation, ReflexConfig(), substeps=2
+    )
+    encoders = lab.scene.sensors_of(res.sensordata, [f"lwr_q{i}" for i in range(1, 8)])
+    RobotKinematics.from_scene(lab.scene).forward(encoders)
+    assert [list(k.signatures) for k in kernels] == loaded

@@ -87,6 +87,21 @@ class RobotKinematics:
             ft_rot=r_last.T @ data.site_xmat[site_ft].reshape(3, 3),
         )
 
+    @staticmethod
+    def load_compiled() -> None:
+        """Load the compiled chain (:mod:`armlab.models._fk_kernel`) from numba's cache (compiled
+        there on a first use) without a scene: :meth:`forward` of an identity chain."""
+        eye = np.eye(3)
+        RobotKinematics(
+            base_pos=np.zeros(3),
+            base_rot=eye,
+            link_pos=np.zeros((7, 3)),
+            link_rot=np.tile(eye, (7, 1, 1)),
+            axes=np.tile([0.0, 0.0, 1.0], (7, 1)),
+            contact_pos=np.zeros(3),
+            ft_rot=eye,
+        ).forward(np.zeros((1, 7)))
+
     def forward(self, q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """World position of the cuff contact point and orientation of the F/T frame.
 

@@ -148,6 +148,10 @@ class Protocol:
         groups: config group -> default option (``configs/<group>/<option>.yaml``) composed
             before the protocol's own ``configs/protocol/<name>.yaml`` (if that file exists).
         simulate: ``(cfg) -> Simulated``.
+        preload: ``() -> None``, optional: loads what the simulation will need and can load before
+            it starts (compiled code from numba's cache); the runner calls it on a background
+            thread while the run starts (imports, plan), when a core is idle, instead of during
+            the simulation, whose rollout keeps every core busy.
         validate: ``(cfg) -> None``: the checks that need no simulation (the scenario, sample rates
             against the perturbation and the sensors, filter cut-offs against Nyquist, windows
             against the record): :class:`~armlab.errors.ConfigError` on a setting that cannot run,
@@ -180,6 +184,7 @@ class Protocol:
     schema: type | None = None
     groups: Mapping[str, str] = field(default_factory=dict)
     simulate: Callable[[Any], Simulated] | None = None
+    preload: Callable[[], None] | None = None
     validate: Callable[[Any], None] | None = None
     reestimate_group: str | None = None
     reestimate: Callable[[TrialSet, Any, list[str]], dict] | None = None

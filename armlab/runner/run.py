@@ -69,8 +69,6 @@ def _freeze(arrays) -> list[np.ndarray]:
 
 
 def _run(cfg: ExperimentConfig, out_dir: Path, config_yaml: str, timing: dict) -> dict:
-    from armlab import viz  # the only place figures and recordings are made
-
     protocol = registry.get(cfg.protocol_name, need="run")
     check_effects(protocol, cfg)
     # One background thread: rerun is imported once the protocol has simulated (when the run
@@ -85,10 +83,17 @@ def _run(cfg: ExperimentConfig, out_dir: Path, config_yaml: str, timing: dict) -
     frozen: list[np.ndarray] = []
     try:
         with ThreadPoolExecutor(max_workers=1) as background:
+            # what the simulation can load beforehand (Protocol.preload) loads while viz is imported
+            # and the simulation prepares, on the core that is idle then
+            preloading = background.submit(protocol.preload) if protocol.preload is not None else None
+            from armlab import viz  # the only place figures and recordings are made
+
             t0 = time.perf_counter()
             progress.stage("simulate")  # each stage's size, where known, comes from the computation
             sim = protocol.simulate(cfg)
             timing["simulate_s"] = time.perf_counter() - t0
+            if preloading is not None:
+                preloading.result()  # done by now; raises what it raised
             if cfg.output.recording:
                 background.submit(viz.preload_rerun)
             trials = sim.trials

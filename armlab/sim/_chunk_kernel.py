@@ -17,7 +17,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["first_bad_step", "muscle_commands", "robot_targets", "store_history"]
+__all__ = ["first_bad_step", "load", "muscle_commands", "robot_targets", "store_history"]
 
 
 @njit(nogil=True, cache=True)
@@ -114,3 +114,14 @@ def first_bad_step(time_in: np.ndarray, states: np.ndarray, dt: float) -> int:
                 if not np.isfinite(states[i, s, c]):
                     return i * m + s
     return -1
+
+
+def load() -> None:
+    """Load every kernel, for the argument types and layouts :func:`armlab.sim.rollout.simulate`
+    passes, from numba's cache (compiled there on a first use), by calling each on one tiny chunk."""
+    ctrl, ring = np.zeros((1, 1, 2)), np.zeros((1, 2, 2))
+    one = np.zeros(1, dtype=np.intp)
+    robot_targets(ctrl, one, np.zeros((1, 1, 1)), one, 0)
+    muscle_commands(ctrl, one, np.zeros((1, 1, 1)), 0, ring, 1, 1, np.zeros(1), 1.0, 0.0, 0.0, 0.0)
+    store_history(ring, np.zeros((1, 1, 2)), np.arange(2, dtype=np.intp), 0)
+    first_bad_step(np.ones(1), np.ones((1, 1, 2)), 1.0)

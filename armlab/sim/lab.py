@@ -26,6 +26,7 @@ from armlab.perturbations.quintic import quintic_profile
 from armlab.perturbations.scenario import Scenario, TrialPlan
 from armlab.sensors.channel import ChannelSpec, apply_channel
 from armlab.sensors.presets import SensorSuite, measure
+from armlab.sim import _chunk_kernel
 from armlab.sim.hold import HoldState, hand_world, settle
 from armlab.sim.robot_ik import solve_ik
 from armlab.sim.rollout import simulate
@@ -37,6 +38,7 @@ __all__ = [
     "LAB_EFFECTS",
     "LabRecording",
     "PATH_POINTS",
+    "load_compiled",
     "record_trials",
     "robot_target_paths",
 ]
@@ -117,6 +119,16 @@ class LabRecording:
     truth: GroundTruth
     scene: Scene
     hold: HoldState
+
+
+def load_compiled() -> None:
+    """Load the compiled loops this laboratory runs from numba's cache (compiling them on a first
+    use): the stepping's chunk kernels (:mod:`armlab.sim._chunk_kernel`) and the readings'
+    kinematics (:mod:`armlab.models._fk_kernel`), about 0.35 CPU-s in a new process. A protocol
+    declares it as its ``preload`` (the runner calls it where a core is idle); otherwise
+    :func:`record_trials` loads it beside the first chunks."""
+    _chunk_kernel.load()
+    RobotKinematics.load_compiled()
 
 
 def robot_target_paths(
@@ -222,9 +234,10 @@ def record_trials(
         hint=_UNSTABLE_HINT,
     )
     kinematics = RobotKinematics.from_scene(scene)
-    # the compiled kinematics (numba and its cached machine code, ~0.2 s) load while the trials step
+    # the compiled loops (numba's cached machine code) load beside the first chunks, if no preload
+    # (Protocol.preload) has loaded them already
     with ThreadPoolExecutor(max_workers=1) as loader:
-        loaded = loader.submit(kinematics.forward, np.zeros((1, 7)))
+        loaded = loader.submit(load_compiled)
         sim = simulate(
             scene, hold.state, paths, muscle_base, cfg.reflex, substeps=substeps, who=who, target_rows=path_of
         )

@@ -9,7 +9,7 @@ from armlab.protocols.base import Protocol
 from armlab.protocols.conditioning_window import hooks, preflight
 from armlab.protocols.conditioning_window.config import ConditioningWindowConfig
 from armlab.protocols.conditioning_window.diagnosis import HOOKS
-from armlab.sim.lab import LAB_EFFECTS
+from armlab.sim.lab import LAB_EFFECTS, load_compiled
 
 __all__ = ["PROTOCOL", "ConditioningWindowConfig"]
 
@@ -27,6 +27,7 @@ PROTOCOL = Protocol(
         "estimator": "joint_ls",
     },
     simulate=hooks.simulate,
+    preload=load_compiled,
     validate=preflight.validate,
     reestimate_group="estimator",
     reestimate=hooks.reestimate,
