@@ -21,7 +21,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.lib.stride_tricks import sliding_window_view
+from numpy.lib.stride_tricks import as_strided
 
 from armlab.errors import EstimationError
 from armlab.estimation.processing import JointSignals
@@ -100,6 +100,17 @@ def _fill_regressor(
 _N_BASIS = 10
 
 
+def _after_onset(a: np.ndarray, idx: np.ndarray, on: np.ndarray, length: int) -> np.ndarray:
+    """``length`` samples of ``a`` (n_trials, n_samples, k) from ``on[i]`` in trial ``idx[i]``:
+    (n, k, length), a copy. Sample windows are a read-only strided view (what NumPy's
+    ``sliding_window_view`` makes, without its argument checks, which cost more than the gather
+    for the windows' small groups); the caller checks that the windows fit in the records."""
+    n, n_samples, k = a.shape
+    s0, s1, s2 = a.strides
+    shape = (n, n_samples - length + 1, k, length)
+    return as_strided(a, shape=shape, strides=(s0, s1, s2, s1), writeable=False)[idx, on]
+
+
 def _basis(signals: JointSignals, idx: np.ndarray, length: int) -> np.ndarray:
     """The signal basis ``u`` over ``length`` samples after onset of trials ``idx``: (n, 10, length).
 
@@ -108,7 +119,7 @@ def _basis(signals: JointSignals, idx: np.ndarray, length: int) -> np.ndarray:
     """
     on = signals.onset_index[idx]
     q, qd, qdd, dq, dtau = (
-        sliding_window_view(a, length, axis=1)[idx, on]  # (n, 2, length) copies
+        _after_onset(a, idx, on, length)  # (n, 2, length) copies
         for a in (signals.q, signals.qd, signals.qdd, signals.dq, signals.dtau)
     )
     s2, c2 = np.sin(q[:, 1]), np.cos(q[:, 1])
