@@ -262,6 +262,29 @@ class CocontractionVariation(Effect):
 
 
 @dataclass(kw_only=True)
+class OperatingPointImpedance(Effect):
+    NAME: ClassVar[str] = "operating_point_impedance"
+    PHYSICS: ClassVar[str] = (
+        "the joint's stiffness and damping change with its operating angle: a slow, large movement "
+        "carries the joint through postures where muscle lengths, moment arms and passive tissue "
+        "differ, so the impedance about each posture is not the one about another"
+    )
+    SOURCE: ClassVar[str] = (
+        "Weiss, Kearney & Hunter 1986 (J. Biomech. 19:727 and 19:737): ankle stiffness varies "
+        "several-fold over the range of motion; Ludvig et al. 2011 (IEEE TBME 58:1715): its "
+        "time-varying identification during movement"
+    )
+    CONFUSABLE: ClassVar[dict[str, str]] = {
+        "cocontraction_variation": "trials at fixed postures with a constant tonic contraction, "
+        "or a movement at a constant tonic contraction (the operating angle changes, the activation "
+        "does not)"
+    }
+    SIGNED: ClassVar[tuple[str, ...]] = ("stiffness_slope_per_rad", "damping_slope_per_rad")
+    stiffness_slope_per_rad: float = 3.0  # 1/rad, relative change of K per rad of operating angle
+    damping_slope_per_rad: float = 1.0  # 1/rad, relative change of B per rad of operating angle
+
+
+@dataclass(kw_only=True)
 class RobotModelError(Effect):
     NAME: ClassVar[str] = "robot_model_error"
     LEVEL: ClassVar[EffectLevel] = "controller"
@@ -319,6 +342,7 @@ EFFECTS: dict[str, type[Effect]] = {
         ChannelDelay,
         PayloadMass,
         CocontractionVariation,
+        OperatingPointImpedance,
         RobotModelError,
         PlaneTilt,
         TorsoTranslation,

@@ -17,7 +17,10 @@ in the scoring band) and ``residual_tests_final`` (the residual tests of the fin
   against lag, nominal and final model, with the ±95 % bound of a white residual;
 - ``time_overlay.png``: the first seconds of the held-out part of (up to four) trials, measured,
   nominal and corrected torque above, both residuals below;
-- ``vaf_per_trial.png``: held-out VAF per trial and stage, with the best VAF the noise allows.
+- ``vaf_per_trial.png``: held-out VAF per trial and stage, with the best VAF the noise allows;
+- ``operating_point.png`` (time-varying recordings only, results holding ``operating_point``):
+  stiffness and damping fitted in bins of the operating angle (± one standard error) and the
+  time-varying nominal's quadratics, with the stationary nominal's value as a dashed line.
 
 :func:`diagnosis_recording` writes every trial's torques, residuals and joint angle on the
 ``trial_time`` timeline (s from the trial's start) into one ``.rrd`` file. Matplotlib is driven
@@ -228,6 +231,35 @@ def _vaf_figure(groups, path: Path) -> Path:
     return save_png(fig, path)
 
 
+def _operating_point_figure(groups, path: Path) -> Path:
+    fig, axes = _grid(2, 4.2, 3.4)
+    for ax, (k, unit) in zip(axes, (("K", "N·m/rad"), ("B", "N·m·s/rad")), strict=False):
+        for label, r, _ in groups:
+            op = r["operating_point"]
+            binned = op["binned"]["parameters"][k]
+            ax.errorbar(
+                op["binned"]["centres_rad"],
+                binned["values"],
+                yerr=binned["se"],
+                fmt="o",
+                ms=4,
+                capsize=2,
+                label=f"{label}: binned fit",
+            )
+            curves = op["curves"]
+            ax.plot(curves["operating_angle_rad"], curves[k], lw=1.5, label=f"{label}: time-varying nominal")
+            ax.axhline(op["coefficients"][k], color="0.5", ls="--", lw=1, label="at the mean angle")
+        ax.set_xlabel("operating angle (rad)")
+        ax.set_ylabel(f"{k} ({unit})")
+        ax.grid(True, alpha=0.3)
+        ax.legend(fontsize=7)
+    for ax in axes[2:]:
+        ax.set_visible(False)
+    verdicts = "; ".join(f"{label}: {_verdict(r)}" for label, r, _ in groups)
+    fig.suptitle(f"Impedance against the operating angle ({verdicts})", fontsize=10)
+    return save_png(fig, path)
+
+
 def diagnosis_figures(
     series: Mapping[str, Any], results: Mapping[str, Any], out_dir: str | Path
 ) -> list[Path]:
@@ -241,13 +273,15 @@ def diagnosis_figures(
 
     Returns:
         ``gap_by_band.png``, ``gap_by_window.png``, ``residual_correlation.png``,
-        ``time_overlay.png`` and ``vaf_per_trial.png`` under ``out_dir``.
+        ``time_overlay.png`` and ``vaf_per_trial.png`` under ``out_dir``, then
+        ``operating_point.png`` for a time-varying recording.
 
     Raises:
         DataError: ``series`` does not match ``results``, or a figure file already exists.
     """
     out = Path(out_dir)
     groups = _groups(series, results)
+    varying = [g for g in groups if "operating_point" in g[1]]
     return [
         _gap_figure(
             groups, "bands", "band_hz", "band (Hz)", "Held-out gap by frequency band", out / "gap_by_band.png"
@@ -263,6 +297,7 @@ def diagnosis_figures(
         _correlation_figure(groups, out / "residual_correlation.png"),
         _overlay_figure(groups, out / "time_overlay.png"),
         _vaf_figure(groups, out / "vaf_per_trial.png"),
+        *([_operating_point_figure(varying, out / "operating_point.png")] if varying else []),
     ]
 
 

@@ -76,6 +76,10 @@ class PreparedTrial:
             and decimated like the torque (:meth:`to_fit_rate`), since a nonlinearity of a
             band-limited signal is not the band-limited nonlinearity.
         band_hz: Hz, the anti-alias cut-off.
+        op: (n,) rad, the operating angle of a time-varying trial (band-limited and decimated
+            like the angle) less the mean over all trials' operating angles (:attr:`op_ref`);
+            None for a stationary trial.
+        op_ref: rad, that mean (0 for a stationary trial).
     """
 
     name: str
@@ -92,6 +96,8 @@ class PreparedTrial:
     x_raw: np.ndarray
     v_raw: np.ndarray
     band_hz: float
+    op: np.ndarray | None = None
+    op_ref: float = 0.0
 
     def to_fit_rate(self, z_raw: np.ndarray) -> np.ndarray:
         """A raw-rate signal (n_raw,) or (n_raw, k) band-limited and decimated like the torque."""
@@ -153,8 +159,12 @@ def prepare_trials(
             f"({fs:g} Hz) with diagnosis.fs_fit_hz={fs_fit_hz:g} give {fs_fit:g} Hz; valid: band_hz < "
             f"{0.45 * fs_fit:.3g} Hz, or a higher fs_fit_hz (up to the data's rate)"
         )
+    # a time-varying group: every trial carries its operating angle (else none is used)
+    ops = [getattr(r, "operating_point", None) for r in records]
+    varying = all(o is not None for o in ops)
+    op_ref = float(np.mean(np.concatenate([np.asarray(o, float) for o in ops]))) if varying else 0.0
     out = []
-    for r in records:
+    for r, op_raw in zip(records, ops, strict=True):
         n = np.asarray(r.position).size
         if n / fs < min_duration_s:
             raise DataError(
@@ -184,6 +194,12 @@ def prepare_trials(
                 "which leaves less than half of it"
             )
         train, held = inner & first, inner & ~first
+        op = None
+        if varying:
+            op = lowpass_zero_phase(
+                np.asarray(op_raw, float), fs, band_hz, _BAND_ORDER, axis=0, padtype=_PADTYPE
+            )
+            op = op[::q] - op_ref
         out.append(
             PreparedTrial(
                 name=r.name,
@@ -200,6 +216,8 @@ def prepare_trials(
                 x_raw=xr,
                 v_raw=vr,
                 band_hz=band_hz,
+                op=op,
+                op_ref=op_ref,
             )
         )
     return tuple(out)

@@ -13,13 +13,19 @@ import numpy as np
 
 from armlab.config.diagnosis import DiagnosisConfig
 from armlab.diagnosis.attribution import held_out_gap, select_candidates, select_effects
-from armlab.diagnosis.families import FittedModel
+from armlab.diagnosis.families import FittedModel, fit_model
 from armlab.diagnosis.localise import band_breakdown, frf_parameters, residual_tests, window_breakdown
 from armlab.dsp import zero_phase
 from armlab.errors import ConfigError, DataError
 from armlab.protocols.joint_1dof.diagnosis.data import highpass_sos, noise_floor, prepare_trials
-from armlab.protocols.joint_1dof.diagnosis.models import JOINT_FAMILY, JOINT_SURROGATES
+from armlab.protocols.joint_1dof.diagnosis.models import (
+    JOINT_FAMILY,
+    JOINT_SURROGATES,
+    JOINT_TV_FAMILY,
+    OP_LINEAR_NAMES,
+)
 from armlab.protocols.joint_1dof.diagnosis.rules import RULES
+from armlab.protocols.joint_1dof.diagnosis.time_varying import scan_operating_point
 
 __all__ = [
     "candidate_names",
@@ -101,6 +107,64 @@ def check_referee(ref, cfg: DiagnosisConfig) -> None:
         raise ConfigError(f"referee.fs_hz={fs:g}: {exc}") from None
 
 
+_OP_EFFECT = "operating_point_impedance"
+
+
+def _operating_point(
+    trials, y_band, hp, floor: float, cfg: DiagnosisConfig, band_share: float
+) -> tuple[dict, FittedModel]:
+    """Whether the impedance varies with the operating angle, where and how much, and how far a
+    time-varying nominal shrinks the gap (:mod:`.time_varying`; docs/diagnosis_schema.md); and the
+    stationary nominal fitted for it."""
+    stationary = fit_model(trials, y_band, (), hp, family=JOINT_FAMILY)
+    sign = -1.0 if sum(float(np.mean(b[2])) for b in stationary.beta) < 0 else 1.0
+    scan = scan_operating_point(trials, y_band, hp, band_share=band_share, sign=sign)
+    tv = fit_model(trials, y_band, (), hp, family=JOINT_TV_FAMILY)
+    gap_s = held_out_gap(stationary, trials, y_band)[0]
+    gap_tv = held_out_gap(tv, trials, y_band)[0]
+    excess = max(gap_s - floor, 0.0)
+    shrink = gap_s - gap_tv
+    varies = bool(
+        scan.varying
+        and excess > cfg.none_tolerance * floor
+        and shrink >= cfg.min_step_fraction * excess
+        and shrink >= cfg.min_floor_fraction * floor
+    )
+    # K(p), B(p) of the time-varying nominal over the bins' range (trial-mean coefficients)
+    beta = np.mean(np.asarray(tv.beta, float), axis=0) * sign
+    names = list(tv.linear_names)
+    grid = np.linspace(scan.edges_rad[0], scan.edges_rad[-1], 41)
+    p = grid - trials[0].op_ref
+    coef = {n: float(beta[names.index(n)]) for n in ("B", "K", *OP_LINEAR_NAMES)}
+    curves = {
+        "K": (coef["K"] + coef[OP_LINEAR_NAMES[0]] * p + coef[OP_LINEAR_NAMES[2]] * p**2).tolist(),
+        "B": (coef["B"] + coef[OP_LINEAR_NAMES[1]] * p + coef[OP_LINEAR_NAMES[3]] * p**2).tolist(),
+    }
+    where = None
+    if scan.varying:
+        k = scan.varying[0]
+        v = scan.values[k]
+        where = {
+            "parameter": k,
+            "from_rad": float(scan.edges_rad[0]),
+            "to_rad": float(scan.edges_rad[-1]),
+            "lowest": {"value": float(v.min()), "at_rad": float(scan.centres_rad[int(np.argmin(v))])},
+            "highest": {"value": float(v.max()), "at_rad": float(scan.centres_rad[int(np.argmax(v))])},
+        }
+    summary = {
+        "varies": varies,
+        "where": where,
+        "binned": scan.as_dict(),
+        "stationary_nominal_gap": gap_s,
+        "time_varying_nominal_gap": gap_tv,
+        "explained_fraction": shrink / excess if excess > 0 else 0.0,
+        "reference_rad": trials[0].op_ref,
+        "coefficients": coef,
+        "curves": {"operating_angle_rad": grid.tolist(), **curves},
+    }
+    return summary, stationary
+
+
 def _check_rate(names: list[str], fs_fit: float, fs_raw: float) -> None:
     """DataError if a candidate searches a frequency (a ``*_hz`` parameter) at or beyond the
     fitting rate's Nyquist frequency: its filter cannot be built there (e.g. 100 Hz data against
@@ -125,6 +189,11 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
     floor = noise.variance_Nm2 * n_h / tss
     names = candidate_names(cfg)
     _check_rate(names, fs, records[0].fs_hz)
+    band_share = (cfg.band_hz - cfg.highpass_hz) / (0.5 * fs)
+    varying, stationary = None, None
+    if all(tr.op is not None for tr in trials):  # a time-varying recording
+        varying, stationary = _operating_point(trials, y_band, hp, floor, cfg, band_share)
+    tv = varying is not None and varying["varies"]
     sel = select_effects(
         trials,
         y_band,
@@ -132,17 +201,37 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
         {n: JOINT_SURROGATES[n] for n in names},
         floor,
         cfg,
-        band_share=(cfg.band_hz - cfg.highpass_hz) / (0.5 * fs),
-        family=JOINT_FAMILY,
+        band_share=band_share,
+        family=JOINT_TV_FAMILY if tv else JOINT_FAMILY,
     )
-    nominal = sel.stages[0]
+    # with a time-varying nominal, the stationary one is the first stage and the time-varying one
+    # the stage that adds operating_point_impedance
+    models = [stationary, *sel.stages] if tv else list(sel.stages)
+    labels = (
+        [[]] + [[_OP_EFFECT, *m.effects] for m in sel.stages] if tv else [list(m.effects) for m in models]
+    )
+    nominal = models[0]
     k_total = sum(float(np.mean(b[2])) for b in nominal.beta)
     sign = -1.0 if k_total < 0 else 1.0  # the impedance is -torque/position when antiphase
     frf_meas = [frf_parameters(tr, y) for tr, y in zip(trials, y_band, strict=True)]  # once, for every stage
-    stages = [_stage(m, trials, y_band, noise, floor, sign, frf_meas) for m in sel.stages]
+    stages = [
+        {**_stage(m, trials, y_band, noise, floor, sign, frf_meas), "effects": label}
+        for m, label in zip(models, labels, strict=True)
+    ]
     ranking = [{k: v for k, v in e.items() if k != "model"} for e in sel.rankings[0]] if sel.rankings else []
+    verdict, partial = sel.verdict, sel.partial
+    if tv:
+        # the time-varying nominal is the first accepted effect: the core's rule for the effects
+        # accepted together (they must leave at most 1 - min_explained of the stationary nominal's
+        # excess, or be within none_tolerance of the floor) applied from the stationary nominal
+        accepted = sel.partial or [n for n in sel.verdict if n not in ("none", "unknown")]
+        excess = max(stages[0]["held_out_gap"] - floor, 0.0)
+        left = stages[-1]["held_out_gap"] - floor
+        explained = left <= max(cfg.none_tolerance * floor, (1.0 - cfg.min_explained) * excess)
+        verdict = [_OP_EFFECT, *accepted] if explained else [_OP_EFFECT, *accepted, "unknown"]
+        partial = [] if explained else [_OP_EFFECT, *accepted]
     results = {
-        "verdict": sel.verdict,
+        "verdict": verdict,
         "ranking": ranking,
         "ranking_steps": [[{k: v for k, v in e.items() if k != "model"} for e in r] for r in sel.rankings],
         "gap": {
@@ -162,8 +251,9 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
         },
         "how_far": stages,
         "indistinct": sel.indistinct,
-        "partial": sel.partial,
+        "partial": partial,
         "torque_sign": "antiphase (impedance = -torque/position)" if sign < 0 else "in phase",
+        **({"operating_point": varying} if varying is not None else {}),
         "trials": [tr.name for tr in trials],
     }
     series = {
@@ -171,7 +261,7 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
         "measured": y_band,
         "nominal": list(nominal.predictions),
         "corrected": list(sel.stages[-1].predictions),
-        "stages": sel.stages,
+        "stages": models,
         "residual_tests_final": residual_tests(trials, sel.stages[-1].residuals),
         "noise": noise,
     }

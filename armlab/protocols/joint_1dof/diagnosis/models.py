@@ -33,6 +33,8 @@ from armlab.protocols.joint_1dof.diagnosis.data import PreparedTrial
 __all__ = [
     "JOINT_FAMILY",
     "JOINT_SURROGATES",
+    "JOINT_TV_FAMILY",
+    "OP_LINEAR_NAMES",
 ]
 
 
@@ -96,8 +98,11 @@ def _effect_column(tr: PreparedTrial, name: str, values: tuple[float, ...]) -> n
     return out
 
 
-def _columns(tr: PreparedTrial, model: tuple[Surrogate, ...], theta: dict[str, float]) -> np.ndarray:
-    """(n, k) regressor of one trial for the composed model."""
+def _columns(
+    tr: PreparedTrial, model: tuple[Surrogate, ...], theta: dict[str, float], op: bool = False
+) -> np.ndarray:
+    """(n, k) regressor of one trial for the composed model; ``op``: with the time-varying
+    nominal's columns (:data:`OP_LINEAR_NAMES`, the trial's operating angle ``tr.op``)."""
     names = [s.name for s in model]
     cols: list[np.ndarray]
     if "cuff_compliance" in names or "transmission_compliance" in names:
@@ -115,6 +120,9 @@ def _columns(tr: PreparedTrial, model: tuple[Surrogate, ...], theta: dict[str, f
         cols.append(_effect_column(tr, "joint_friction", values))
     if "cocontraction_variation" in names:
         cols += [tr.m * tr.x, tr.m * tr.v]
+    if op:  # K and B as quadratics of the operating angle, before the output transforms
+        p = tr.op
+        cols += [p * tr.x, p * tr.v, p * p * tr.x, p * p * tr.v]
     phi = np.stack(cols, axis=1)
     if "channel_delay" in names:
         phi = shift_columns(tr.t_s, phi, theta["channel_delay.delay_s"])
@@ -176,7 +184,7 @@ JOINT_SURROGATES: dict[str, Surrogate] = {
 }
 
 
-def _linear_names(model: tuple[Surrogate, ...]) -> tuple[str, ...]:
+def _linear_names(model: tuple[Surrogate, ...], op: bool = False) -> tuple[str, ...]:
     names = [s.name for s in model]
     if "cuff_compliance" in names:
         base = ["compliance.gain", "cuff_compliance.pedal_inertia"]
@@ -187,6 +195,8 @@ def _linear_names(model: tuple[Surrogate, ...]) -> tuple[str, ...]:
     for s in model:
         if s.kind == "additive":
             base += [f"{s.name}.{n}" for n in s.linear]
+    if op:
+        base += OP_LINEAR_NAMES
     return tuple(base)
 
 
@@ -200,3 +210,21 @@ def _start_compliance(theta, name, base_beta):
 
 #: The 1-DoF joint protocol's model family.
 JOINT_FAMILY = ModelFamily(columns=_columns, linear_names=_linear_names, start=_start_compliance)
+
+#: The linear parameters a time-varying recording's nominal adds: K(p) = K + k1 p + k2 p² and
+#: B(p) = B + b1 p + b2 p², p the operating angle less its mean (rad), in N·m/rad per rad^j and
+#: N·m·s/rad per rad^j (the catalogue's ``operating_point_impedance``; torque sign as recorded).
+OP_LINEAR_NAMES = (
+    "operating_point.stiffness_slope",
+    "operating_point.damping_slope",
+    "operating_point.stiffness_curvature",
+    "operating_point.damping_curvature",
+)
+
+#: The same family for time-varying recordings: every model, the nominal first, has stiffness and
+#: damping that vary with the operating angle (:mod:`.time_varying`).
+JOINT_TV_FAMILY = ModelFamily(
+    columns=lambda tr, model, theta: _columns(tr, model, theta, op=True),
+    linear_names=lambda model: _linear_names(model, op=True),
+    start=_start_compliance,
+)
