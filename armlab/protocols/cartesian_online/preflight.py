@@ -2,8 +2,8 @@
 
 Run by :func:`armlab.protocols.compose.compose`, so ``armlab run`` refuses before its run folder
 exists: level B has its own sensor models and settle; level A has ideal sensors (its one sensor
-effect is ``simulation.force_noise_std_N``) and no physics step (``sim.*`` is read by levels B and C only), and the waveforms need at least 10
-samples per ramp at ``sensors.fs_hz``.
+effect is ``simulation.force_noise_std_N``) and no physics step (``sim.*`` is read by levels B and
+C only); the waveforms need at least 10 samples per ramp at ``sensors.fs_hz``.
 """
 
 from __future__ import annotations
