@@ -25,7 +25,9 @@ from armlab.protocols.cartesian_online.experiment import records_from_trials, si
 @pytest.fixture(scope="module")
 def short_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("cart3") / "run"
-    status = main(["run", "protocol=cartesian_online", "simulation.n_stops=3", f"out={out}"])
+    status = main(
+        ["run", "protocol=cartesian_online", "simulation=level_a", "simulation.n_stops=3", f"out={out}"]
+    )
     return out, status
 
 

@@ -37,7 +37,7 @@ from armlab.sim import simulate_level_a
 def cli_run(tmp_path_factory):
     out = tmp_path_factory.mktemp("cart") / "run"
     t0 = time.perf_counter()
-    status = main(["run", "protocol=cartesian_online", f"out={out}"])
+    status = main(["run", "protocol=cartesian_online", "simulation=level_a", f"out={out}"])
     return out, status, time.perf_counter() - t0
 
 
@@ -124,12 +124,14 @@ def test_estimate_reruns_on_the_trial_file_with_overrides(cli_run, tmp_path, cap
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        (["simulation.level=B"], "simulation.level='B' is not valid; choose one of ['A']"),
+        (["simulation.level=C"], "simulation.level='C' is not valid; choose one of ['A', 'B']"),
         (["simulation.stiffness_scale=-1"], "simulation.stiffness_scale must be a positive factor"),
         (["simulation.force_noise_std_N=-0.1"], "simulation.force_noise_std_N must be >= 0 N"),
         (["identification.exp4_methods=[cubic]"], "choose one of ['linear', 'sqrt_damping']"),
-        (["sensors=realistic"], "level A's sensors are the thesis's ideal ones (valid: ideal)"),
-        (["sim.timestep_s=0.001"], "sim.* is not read at simulation.level=A"),
+        (["simulation=level_a", "sensors=realistic"], "level A's sensors are the thesis's ideal ones"),
+        (["simulation=level_a", "sim.timestep_s=0.001"], "sim.* is not read at simulation.level=A"),
+        (["simulation=level_b", "sensors=realistic"], "level B always records through its own JR3"),
+        (["simulation=level_b", "sim.settle_s=0.5"], "sim.settle_s is not read at simulation.level=B"),
         (["effects=[force_sensor_noise]"], "switch them with simulation.force_noise_std_N"),
     ],
 )
@@ -141,7 +143,7 @@ def test_bad_config_values_are_refused_on_one_line(args, message, tmp_path, caps
 
 
 def test_config_refusals_name_the_valid_choices():
-    with pytest.raises(ConfigError, match=r"choose one of \['A'\]"):
+    with pytest.raises(ConfigError, match=r"choose one of \['A', 'B'\]"):
         SimulationConfig(level="C")
     with pytest.raises(ConfigError, match="n_stops must be an integer in \\[3, 200\\]"):
         SimulationConfig(n_stops=1)

@@ -91,6 +91,20 @@ def format_cartesian_table(results: Mapping[str, Any]) -> str:
                     f"{k} {tuple(sel[k]['order'])} ({tuple(e5['thesis_orders'][frame][k])})" for k in _ENTRIES
                 )
             )
+    cmp = results.get("level_b_vs_a")
+    if cmp:
+        lines.append(
+            "level B vs level A on the same paths (%; dynamics (hand inertia, servo compliance) = "
+            "B ideal sensors - A, sensors = B - B ideal):"
+        )
+        for name, r in cmp.items():
+            lines.append(
+                f"  {name:18s} A {r['level_a_pct']:8.3g}  B ideal {r['level_b_ideal_sensors_pct']:8.3g}  "
+                f"B {r['level_b_pct']:8.3g}  dynamics {r['dynamics_effect_points']:+8.3g}  "
+                f"sensors {r['sensor_effect_points']:+8.3g}  "
+                f"peak m*a {r.get('inertial_force_peak_N', float('nan')):.3g} N"
+                f"  ({r['what']})"
+            )
     return "\n".join(lines)
 
 

@@ -2,8 +2,9 @@
 
 The MSc thesis's Chapter 3: a hand whose diagonal stiffness is a quadratic of its position
 (Tables 3.1/3.2) is perturbed by a robot stopping on a reference path; five experiments identify
-it by least squares re-solved as data arrives, up to a polar model. Level A: the thesis's own
-algebraic generator (levels B and C come later).
+it by least squares re-solved as data arrives, up to a polar model. Level B (default): the LWR
+and a hand with inertia in MuJoCo, measured by JR3/encoder models, beside level A (the thesis's own
+algebraic generator) on the same paths; level C comes later.
 """
 
 from armlab.protocols.base import Protocol
@@ -34,7 +35,8 @@ PROTOCOL = Protocol(
     outputs=hooks.outputs,
     format_table=hooks.format_table,
     examples=(
-        "run protocol=cartesian_online simulation.force_noise_std_N=0.05",
+        "run protocol=cartesian_online simulation=level_a simulation.force_noise_std_N=0.05",
+        "run protocol=cartesian_online simulation.corner_s=0.02",
         "run protocol=cartesian_online simulation.stiffness_scale=0.05 seed=3",
         "estimate outputs/cartesian_online/<run> identification.r2_adj_threshold=0.99",
     ),

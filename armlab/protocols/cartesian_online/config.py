@@ -1,7 +1,9 @@
 """The typed experiment of ``cartesian_online`` (paper 002, thesis Ch. 3): the groups it reads.
 
 ``simulation`` says how the five experiments are generated (level A: the thesis's own algebraic
-generator; levels B and C are not built yet and are refused with the valid choices),
+generator, the default until level B's estimates are validated against the field's truth; level
+B: the LWR and a hand with inertia in MuJoCo; level C is not built yet and is refused with the
+valid choices),
 ``identification`` how they are identified and scored (the group ``armlab estimate`` takes).
 Defaults are the thesis's (Tables 3.1-3.3, §3.1-3.5) or, where it is silent, spec 002's and
 docs/cartesian_online.md's documented choices.
@@ -24,9 +26,10 @@ __all__ = [
     "SimulationLevel",
 ]
 
-#: How the experiments are generated: (A) the thesis's algebraic generator (levels B: the LWR and a
-#: hand in MuJoCo, C: the Hill arm as truth, come with later slices of issue 20).
-SimulationLevel = Literal["A"]
+#: How the experiments are generated: (A) the thesis's algebraic generator; (B) the LWR pushing a
+#: hand with inertia through its cuff in MuJoCo, the field as the human's force, measured through
+#: the JR3 F/T and LWR encoder models (level C, the Hill arm as truth, comes with a later slice).
+SimulationLevel = Literal["A", "B"]
 #: Exp. 4 estimators: the thesis's Eq. 3.4.1 (constant damping columns) and the model's own D = δ√K.
 Exp4Method = Literal["linear", "sqrt_damping"]
 IDENTIFICATION_CHOICES: tuple[str, ...] = get_args(Exp4Method)
@@ -42,7 +45,9 @@ else:  # OmegaConf 2.3 rejects Literal field types: it reads these as str, __pos
 class SimulationConfig:
     """How the thesis's five experiments are generated (thesis Ch. 3; spec 002)."""
 
-    level: Level = "A"  # A: q_h = q_r + q_p, F = D(q_h) q̇_h + K(q_h) q_p (thesis Ch. 3)
+    # A (default): the thesis's q_h = q_r + q_p, F = D(q_h) q̇_h + K(q_h) q_p (thesis Ch. 3);
+    # B: the LWR + hand in MuJoCo (armlab.sim.cartesian_level_b)
+    level: Level = "A"
     # dimensionless factor on every stiffness coefficient of Table 3.1 (spec 002: its values are
     # 10-100x physiological hand stiffness; 1 is the thesis)
     stiffness_scale: float = 1.0

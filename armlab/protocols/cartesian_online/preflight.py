@@ -1,9 +1,9 @@
 """The checks of a ``cartesian_online`` config that need no simulation (``Protocol.validate``).
 
 Run by :func:`armlab.protocols.compose.compose`, so ``armlab run`` refuses before its run folder
-exists: level A has ideal sensors (its one sensor effect is ``simulation.force_noise_std_N``) and
-no physics step (``sim.*`` is read by levels B and C only), and the waveforms need at least 10
-samples per ramp at ``sensors.fs_hz``.
+exists: level B has its own sensor models and settle; level A has ideal sensors (its one sensor
+effect is ``simulation.force_noise_std_N``) and no physics step (``sim.*`` is read by levels B and
+C only); the waveforms need at least 10 samples per ramp at ``sensors.fs_hz``.
 """
 
 from __future__ import annotations
@@ -19,6 +19,17 @@ __all__ = ["validate"]
 def validate(cfg: CartesianOnlineConfig) -> None:
     """Raise :class:`ConfigError` on a setting level A cannot honour (never ignore it)."""
     s = cfg.simulation
+    if s.level == "B":
+        if cfg.sensors.preset != "ideal":
+            raise ConfigError(
+                f"sensors.preset={cfg.sensors.preset!r}: level B always records through its own JR3 F/T and "
+                "LWR encoder models and keeps the clean channels beside them (valid: ideal, the default)"
+            )
+        if cfg.sim.settle_s != SimConfig().settle_s:
+            raise ConfigError(
+                "sim.settle_s is not read at simulation.level=B (each perturbation starts at rest at its "
+                "stop, armlab.sim.cartesian_level_b.SETTLE_S); valid: sim.timestep_s, sim.integrator"
+            )
     if s.level == "A":
         if cfg.sensors.preset != "ideal":
             raise ConfigError(

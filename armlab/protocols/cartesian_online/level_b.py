@@ -1,0 +1,153 @@
+"""Level B of ``cartesian_online``: the thesis's perturbations played by the LWR on a hand with inertia.
+
+:func:`simulate_level_b_trials` takes the level-A trials of the same config (the same paths,
+stops and commanded perturbations: level A on the same paths costs ~0.5 s) and replaces their
+channels by what the lab would measure when MuJoCo's LWR plays each commanded perturbation on the
+0.966 kg hand held by the Table 3.1 field (:mod:`armlab.sim.cartesian_level_b`):
+
+- ``hand_pos`` m: the robot's encoders (:data:`~armlab.sensors.presets.LWR_ENCODER`: 0.01°
+  steps) through the robot's forward kinematics to the (rigid) cuff; ``hand_vel`` m/s: their
+  central difference (the thesis's q̇_h is not measured by any sensor);
+- ``hand_force`` N: the JR3 F/T sensor (:data:`~armlab.sensors.presets.JR3_FORCE`: noise,
+  offset, drift, 125 Hz filter, 1 ms delay, 0.0122 N steps) saturating at its rated ±200 N
+  (:data:`JR3_RANGE_N`), turned into the thesis's frame by the encoders' flange orientation, plus
+  the case's extra white noise of level A (``simulation.force_noise_std_N``; the noise study's
+  ``noise_study_std_N`` on ``exp4_noise``);
+- ``pert_pos`` m: measured hand position minus the stopped reference;
+- the clean channels beside them: ``true_hand_pos``, ``true_hand_vel``, ``true_hand_force``
+  (the F/T sensor's clean reading: the robot's force on the hand, inertia included),
+  ``human_force`` (the field's force on the hand) and ``true_stiffness`` at the true hand position.
+
+:func:`clean_trials` swaps the clean channels in (ideal sensors, hand inertia only), so the
+identification can be run three ways: level A, level B with ideal sensors, level B as measured.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from armlab.data.trial import TrialSet
+from armlab.models.cartesian_field import QuadraticImpedanceField
+from armlab.models.cartesian_hand_scene import build_hand_scene
+from armlab.models.robot_fk import RobotKinematics
+from armlab.protocols.cartesian_online.config import CartesianOnlineConfig
+from armlab.sensors.channel import apply_channel
+from armlab.sensors.presets import JR3_FORCE, LWR_ENCODER
+from armlab.sim.cartesian_level_b import simulate_level_b
+
+__all__ = [
+    "JR3_RANGE_N",
+    "LEVEL_B_UNITS",
+    "clean_trials",
+    "simulate_level_b_trials",
+]
+
+#: N, rated range of the JR3 F/T sensor per force axis: its 16384-count full scale is 200 N
+#: (armlab.sensors.presets, JR3 85M35A class); readings beyond it saturate (clipped, per axis)
+JR3_RANGE_N = 200.0
+LEVEL_B_UNITS = {
+    "true_hand_pos": "m",
+    "true_hand_vel": "m/s",
+    "human_force": "N",
+}
+
+
+def _world_xy(rot: np.ndarray, f_site: np.ndarray) -> np.ndarray:
+    """(..., 2) N: a site-frame force (..., 3) in the world's (= the thesis's) x, y."""
+    return np.einsum("...ij,...j->...i", rot, f_site)[..., :2]
+
+
+def simulate_level_b_trials(
+    cfg: CartesianOnlineConfig, trials_a: TrialSet, field: QuadraticImpedanceField
+) -> tuple[TrialSet, str, dict]:
+    """The level-B trials of ``cfg`` on the paths of its level-A trials (module docstring).
+
+    Randomness: ``default_rng(cfg.seed)`` spawns the sensors' generators after level A's (an
+    extra spawn key), so the same seed gives bit-identical trials.
+
+    Returns:
+        ``(trials, scene_xml, summary)``: the trials (level A's meta and attrs, ``level`` B),
+        the composed MJCF, and per case the peak inertial force (N: the clean F/T reading minus the
+        field's force, i.e. what the thesis's massless model misses), the peak |F| and the share
+        of force samples at the JR3's range.
+    """
+    scene = build_hand_scene(cfg.sim)
+    meta = trials_a.trial_meta
+    ref = np.asarray(trials_a.channels["ref_pos"])[:, 0]  # (n, 2) m, stopped during the trial
+    stops, stop_of = np.unique(ref, axis=0, return_inverse=True)
+    sim = simulate_level_b(
+        scene,
+        field,
+        stops,
+        stop_of.ravel(),
+        np.asarray(trials_a.channels["pert_pos"]),
+        fs_hz=trials_a.fs_hz,
+        sigma=float(cfg.simulation.sigma),
+    )
+    fs = trials_a.fs_hz
+    rng_enc, rng_ft, rng_white = np.random.default_rng([cfg.seed, 2]).spawn(3)
+    kin = RobotKinematics.from_scene(scene)
+    pos_true, rot_true = kin.forward(sim.robot_q)
+    q_meas = apply_channel(sim.robot_q, fs, LWR_ENCODER, rng_enc)
+    pos_meas, rot_meas = kin.forward(q_meas)
+    f_site = np.clip(apply_channel(sim.ft_force, fs, JR3_FORCE, rng_ft), -JR3_RANGE_N, JR3_RANGE_N)
+    force_true = _world_xy(rot_true, sim.ft_force)
+    extra = np.asarray(meta["noise_std_N"], float)[:, None, None]  # level A's white noise per case
+    force = _world_xy(rot_meas, f_site) + extra * rng_white.standard_normal(force_true.shape)
+    hand_pos = pos_meas[..., :2]
+    channels = dict(trials_a.channels)
+    channels.update(
+        hand_pos=hand_pos,
+        hand_vel=np.gradient(hand_pos, 1.0 / fs, axis=1),
+        hand_force=force,
+        pert_pos=hand_pos - ref[:, None, :],
+        true_hand_force=force_true,
+        true_stiffness=field.stiffness(sim.hand_pos, cfg.simulation.sigma),
+        true_hand_pos=sim.hand_pos,
+        true_hand_vel=sim.hand_vel,
+        human_force=sim.human_force,
+    )
+    units = {**trials_a.units, **LEVEL_B_UNITS}
+    n_logged = np.asarray(meta["n_logged"])
+    real = np.arange(sim.hand_pos.shape[1])[None, :] < n_logged[:, None]  # (n, s) logged samples
+    inertial = np.linalg.norm(force_true + sim.human_force, axis=-1)  # robot's force − field's = m·a
+    summary = {}
+    for case in dict.fromkeys(str(c) for c in meta["case"]):
+        rows = np.asarray(meta["case"]) == case
+        sat = np.abs(f_site[rows]) >= JR3_RANGE_N
+        summary[case] = {
+            "inertial_force_peak_N": float(inertial[rows][real[rows]].max()),
+            "force_peak_N": float(np.abs(force_true[rows][real[rows]]).max()),
+            "saturated_fraction": float(sat[real[rows]].any(axis=-1).mean()),
+            "excursion_max_m": float(np.abs(sim.hand_pos[rows] - ref[rows][:, None]).max()),
+        }
+    attrs = {**trials_a.attrs, "level": "B"}
+    trials = TrialSet(
+        fs_hz=fs,
+        onset_index=np.asarray(trials_a.onset_index),
+        channels=channels,
+        units=units,
+        trial_meta=dict(meta),
+        attrs=attrs,
+    )
+    return trials, scene.xml, summary
+
+
+def clean_trials(trials: TrialSet) -> TrialSet:
+    """Level-B trials with ideal sensors: the clean channels in place of the measured ones."""
+    ch = dict(trials.channels)
+    ref = np.asarray(ch["ref_pos"])
+    ch.update(
+        hand_pos=ch["true_hand_pos"],
+        hand_vel=ch["true_hand_vel"],
+        hand_force=ch["true_hand_force"],
+        pert_pos=np.asarray(ch["true_hand_pos"]) - ref,
+    )
+    return TrialSet(
+        fs_hz=trials.fs_hz,
+        onset_index=trials.onset_index,
+        channels=ch,
+        units=trials.units,
+        trial_meta=trials.trial_meta,
+        attrs=trials.attrs,
+    )
