@@ -368,6 +368,7 @@ class EffectsConfig:
     channel_delay: ChannelDelay | None = None
     payload_mass: PayloadMass | None = None
     cocontraction_variation: CocontractionVariation | None = None
+    operating_point_impedance: OperatingPointImpedance | None = None
     robot_model_error: RobotModelError | None = None
     plane_tilt: PlaneTilt | None = None
     torso_translation: TorsoTranslation | None = None
