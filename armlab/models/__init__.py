@@ -30,6 +30,12 @@ from armlab.models.cartesian_field import (
     QuadraticImpedanceField,
     quadratic_basis,
 )
+from armlab.models.cartesian_hand_scene import (
+    HAND_HEIGHT_M,
+    ROBOT_BASE_M,
+    HandScene,
+    build_hand_scene,
+)
 from armlab.models.direct_drive_scene import ELBOW_MUSCLES, DirectDriveScene, build_direct_drive_scene
 from armlab.models.elbow_truth import ElbowTruth, elbow_truth
 from armlab.models.frame_change import (
@@ -167,6 +173,10 @@ __all__ = [
     "QUADRATIC_TERMS",
     "THESIS_FIELD",
     "QuadraticImpedanceField",
+    "HAND_HEIGHT_M",
+    "ROBOT_BASE_M",
+    "HandScene",
+    "build_hand_scene",
     "quadratic_basis",
     "evaluate_matrix_field",
     "matrix_field_in_new_frame",

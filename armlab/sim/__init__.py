@@ -6,6 +6,12 @@ from armlab.sim.cartesian_level_a import (
     CartesianRecord,
     simulate_level_a,
 )
+from armlab.sim.cartesian_level_b import (
+    SETTLE_S,
+    LevelBTrials,
+    simulate_level_b,
+    stop_postures,
+)
 from armlab.sim.force_control import ForceTrial, simulate_force_trial
 from armlab.sim.hold import (
     HoldState,
@@ -48,5 +54,9 @@ __all__ = [
     "simulate_capstan",
     "run_trials",
     "CartesianRecord",
+    "SETTLE_S",
+    "LevelBTrials",
+    "simulate_level_b",
+    "stop_postures",
     "simulate_level_a",
 ]
