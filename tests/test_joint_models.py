@@ -36,7 +36,7 @@ from armlab.diagnosis.attribution import held_out_gap
 from armlab.diagnosis.families import fit_model
 from armlab.protocols import registry
 from armlab.protocols.joint_1dof.diagnosis.data import highpass_sos, noise_floor
-from armlab.protocols.joint_1dof.diagnosis.models import JOINT_FAMILY, JOINT_SURROGATES
+from armlab.protocols.joint_1dof.diagnosis.models import JOINT_FAMILY, JOINT_SURROGATES, OP_LINEAR_NAMES
 
 S = JOINT_SURROGATES
 
@@ -66,8 +66,11 @@ def test_surrogates_cover_the_joint_protocol_effects():
     joint = set(registry.get("joint_1dof").catalogue)
     assert set(S) <= joint
     # the rest are sensor noise, drift, quantisation: they set the floor or sit below the
-    # scoring band, no candidate model is needed
-    assert all(EFFECTS[n].LEVEL == "sensor" for n in joint - set(S))
+    # scoring band, no candidate model is needed; and operating_point_impedance, which the
+    # time-varying nominal carries (JOINT_TV_FAMILY, on recordings with an operating angle)
+    rest = joint - set(S) - {"operating_point_impedance"}
+    assert all(EFFECTS[n].LEVEL == "sensor" for n in rest)
+    assert OP_LINEAR_NAMES and all(n.startswith("operating_point.") for n in OP_LINEAR_NAMES)
     for s in S.values():
         assert s.kind in ("additive", "intrinsic", "output", "absorbed")
         for p in s.params:
