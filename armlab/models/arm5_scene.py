@@ -71,6 +71,9 @@ class Arm5Scene:
         tool_mass: kg, everything between the wrist JR3 and the weld (sensor half + cuff);
         tool_com: (3,) m its centre of mass in the cuff-centre (= wrist) frame.
         ft_pos, ft_rot: (3,) m, (3, 3) the JR3 site's pose in the cuff-centre frame.
+        marker_to_wrist: (rotation (3, 3), offset (3,) m) of the wrist frame in the forearm marker
+            cluster's frame (both on the forearm: constant; the true value the kinematic
+            calibration of Eqs. (7)-(9) estimates).
     """
 
     model: mujoco.MjModel
@@ -93,6 +96,7 @@ class Arm5Scene:
     tool_com: np.ndarray
     ft_pos: np.ndarray
     ft_rot: np.ndarray
+    marker_to_wrist: tuple[np.ndarray, np.ndarray]
 
     def sensor(self, sensordata: np.ndarray, name: str) -> np.ndarray:
         """Slice one named sensor out of ``(..., nsensordata)`` sensor data."""
@@ -168,6 +172,8 @@ def build_arm5_scene(robot_base_pos: Sequence[float] = ROBOT_BASE_POS_M) -> Arm5
     r_c, p_c = data.site_xmat[cuff_site].reshape(3, 3), data.site_xpos[cuff_site]
     tool = [int(model.site_bodyid[ft_site]), int(model.site_bodyid[cuff_site])]
     mass = float(model.body_mass[tool].sum())
+    wrist, marker = named_id(model, site, "arm_5dof/wrist"), named_id(model, site, "arm_5dof/forearm_marker")
+    r_m = data.site_xmat[marker].reshape(3, 3)
     com = (model.body_mass[tool, None] * data.xipos[tool]).sum(axis=0) / mass
     return Arm5Scene(
         model=model,
@@ -183,11 +189,15 @@ def build_arm5_scene(robot_base_pos: Sequence[float] = ROBOT_BASE_POS_M) -> Arm5
         sensors=sensor_slices(model),
         contact_site=cuff_site,
         flange_site=cuff_site,
-        wrist_site=named_id(model, site, "arm_5dof/wrist"),
+        wrist_site=wrist,
         ft_site=ft_site,
-        forearm_marker=named_id(model, site, "arm_5dof/forearm_marker"),
+        forearm_marker=marker,
         tool_mass=mass,
         tool_com=r_c.T @ (com - p_c),
         ft_pos=r_c.T @ (data.site_xpos[ft_site] - p_c),
         ft_rot=r_c.T @ data.site_xmat[ft_site].reshape(3, 3),
+        marker_to_wrist=(
+            r_m.T @ data.site_xmat[wrist].reshape(3, 3),
+            r_m.T @ (data.site_xpos[wrist] - data.site_xpos[marker]),
+        ),
     )
