@@ -11,15 +11,19 @@ sensors the noise part grows as 1/sqrt(N), so 20 trials test the tolerances more
 
 from __future__ import annotations
 
+import mujoco
 import numpy as np
 import pytest
 from arm5_data import held_wrench, postures
 
-from armlab.errors import ConfigError
+from armlab.errors import ConfigError, DataError
 from armlab.estimation import (
     WristSensorGeometry,
     axis_angle_deg,
+    chordal_mean_rotation,
     condition_stiffness,
+    interval_mean,
+    quat_to_rot,
     relative_error,
     static_inertial_regression,
     stiffness_ellipsoid,
@@ -156,3 +160,30 @@ def test_timing_outside_the_record_is_refused():
         TrialTiming(pre_interval=(-0.3, 0.0))
     with pytest.raises(ConfigError, match="at least 10 trials"):
         plan_stiffness_trials(8, 5, np.random.default_rng(0))
+
+
+def test_quaternion_and_mean_rotation_helpers():
+    rng = np.random.default_rng(3)
+    quat = rng.normal(size=(6, 4))
+    quat /= np.linalg.norm(quat, axis=1, keepdims=True)
+    for qu, rot in zip(quat, quat_to_rot(quat), strict=True):
+        expected = np.zeros(9)
+        mujoco.mju_quat2Mat(expected, qu)
+        np.testing.assert_allclose(rot, expected.reshape(3, 3), atol=1e-15)  # MuJoCo's convention
+    # rotations +-theta about one axis around a centre: the chordal mean is the centre (exact by
+    # symmetry), and a rotation (det +1)
+    centre = quat_to_rot(quat[0])
+    turns = [
+        quat_to_rot(np.r_[np.cos(a / 2), np.sin(a / 2) * np.array([0.6, 0.0, 0.8])]) for a in (0.01, -0.01)
+    ]
+    mean = chordal_mean_rotation(np.stack([centre @ t for t in turns])[None])[0]
+    np.testing.assert_allclose(mean, centre, atol=1e-14)
+    assert np.linalg.det(mean) == pytest.approx(1.0)
+
+
+def test_interval_mean_refuses_an_empty_interval():
+    x = np.zeros((2, 5, 3))
+    t = np.arange(5) * 0.1 - 0.2
+    np.testing.assert_allclose(interval_mean(x + np.arange(5)[None, :, None], t, (-0.2, 0.0)), 0.5)
+    with pytest.raises(DataError, match="no sample in the interval"):
+        interval_mean(x, t, (1.0, 2.0))
