@@ -154,6 +154,15 @@ from armlab.estimation.stiffness_ellipsoid import (
     ellipsoid_surface,
     stiffness_ellipsoid,
 )
+from armlab.estimation.stiffness_trials import (
+    ConditionStiffness,
+    WristSensorGeometry,
+    chordal_mean_rotation,
+    condition_stiffness,
+    interval_mean,
+    quat_to_rot,
+    wrench_on_limb,
+)
 from armlab.estimation.virtual_force import (
     ArmFit,
     FixtureFit,
@@ -290,4 +299,11 @@ __all__ = [
     "identify_exp4",
     "identify_exp5",
     "RANK_RTOL",
+    "ConditionStiffness",
+    "WristSensorGeometry",
+    "chordal_mean_rotation",
+    "condition_stiffness",
+    "interval_mean",
+    "quat_to_rot",
+    "wrench_on_limb",
 ]

@@ -1,5 +1,13 @@
 """Loading and composing the MJCF models, analytic arm kinematics, and ground truth."""
 
+from armlab.models.arm5_scene import (
+    ARM5_LAB_TIMESTEP_S,
+    ROBOT_BASE_POS_M,
+    ROBOT_KP,
+    ROBOT_KV,
+    Arm5Scene,
+    build_arm5_scene,
+)
 from armlab.models.arm5_truth import (
     XI_RED_NAMES,
     InertialTruth,
@@ -182,4 +190,10 @@ __all__ = [
     "matrix_field_in_new_frame",
     "polynomial_in_new_frame",
     "rotation",
+    "ARM5_LAB_TIMESTEP_S",
+    "ROBOT_BASE_POS_M",
+    "ROBOT_KP",
+    "ROBOT_KV",
+    "Arm5Scene",
+    "build_arm5_scene",
 ]

@@ -13,6 +13,9 @@ from armlab.sensors.presets import (
     LWR_ENCODER,
     LWR_JOINT_TORQUE,
     SENSOR_PRESETS,
+    VICON_MARKER_POS,
+    VICON_MARKER_QUAT,
+    Arm5SensorSuite,
     CapstanSensorSuite,
     SensorSuite,
     get_preset,
@@ -37,4 +40,7 @@ __all__ = [
     "JR3_BASE_FORCE",
     "JR3_BASE_TORQUE",
     "CapstanSensorSuite",
+    "Arm5SensorSuite",
+    "VICON_MARKER_POS",
+    "VICON_MARKER_QUAT",
 ]

@@ -29,6 +29,9 @@ __all__ = [
     "JR3_50M31_FORCE",
     "JR3_BASE_FORCE",
     "JR3_BASE_TORQUE",
+    "Arm5SensorSuite",
+    "VICON_MARKER_POS",
+    "VICON_MARKER_QUAT",
     "DD_ENCODER",
     "JR3_FORCE",
     "JR3_TORQUE",
@@ -147,12 +150,22 @@ JR3_BASE_TORQUE = ChannelSpec(
     quant_step=200.0 / 16384,  # N·m, 200 N·m full scale / 16384 counts (JR3 DSP, see JR3_FORCE)
 )
 
+# --- Vicon marker clusters of the 5-DoF arm lab (seeds/001 Sec. 3: Vicon T10 at 500 Hz) ----------
+# Noise 0.2 mm per axis on a cluster's position and 0.3 deg per axis on its orientation (spec 001,
+# Set-up, assumption). The orientation is recorded as a unit quaternion (w, x, y, z): a small
+# rotation by theta per axis moves its vector part by theta / 2, so each component gets
+# radians(0.3) / 2 of white noise and the reader renormalises (assumption: small-angle model).
+VICON_MARKER_POS = ChannelSpec(noise_std=0.2e-3)  # m, spec 001 assumption
+VICON_MARKER_QUAT = ChannelSpec(noise_std=math.radians(0.3) / 2)  # quaternion units, see above
+
 SENSOR_PRESETS: dict[str, ChannelSpec] = {
     "capstan_encoder": CAPSTAN_ENCODER,
     "adxl203": ADXL203_ACCEL,
     "jr3_50m31_force": JR3_50M31_FORCE,
     "jr3_base_force": JR3_BASE_FORCE,
     "jr3_base_torque": JR3_BASE_TORQUE,
+    "vicon_marker_pos": VICON_MARKER_POS,
+    "vicon_marker_quat": VICON_MARKER_QUAT,
     "jr3_force": JR3_FORCE,
     "jr3_torque": JR3_TORQUE,
     "lwr_encoder": LWR_ENCODER,
@@ -338,4 +351,45 @@ class CapstanSensorSuite(_Suite):
             motor_torque=ChannelSpec.ideal(),
             accelerometer=ADXL203_ACCEL,
             ft_force=JR3_50M31_FORCE,
+        )
+
+
+@dataclass(frozen=True, kw_only=True)
+class Arm5SensorSuite(_Suite):
+    """The sensors of the 5-DoF stiffness lab (seeds/001 Sec. 3).
+
+    Attributes:
+        wrist_force, wrist_torque: the JR3 between robot and cuff, N and N·m (channels
+            ``wrist_force``, ``wrist_torque``; 2 kHz).
+        base_force, base_torque: the JR3 under the seat, N and N·m (channels ``base_force``,
+            ``base_torque``; 2 kHz).
+        marker_pos, marker_quat: a Vicon marker cluster's position m and unit quaternion (channels
+            ``forearm_marker_pos``, ``forearm_marker_quat``; 500 Hz).
+    """
+
+    CHANNELS: ClassVar[dict[str, str]] = {
+        "wrist_force": "wrist_force",
+        "wrist_torque": "wrist_torque",
+        "base_force": "base_force",
+        "base_torque": "base_torque",
+        "forearm_marker_pos": "marker_pos",
+        "forearm_marker_quat": "marker_quat",
+    }
+    wrist_force: ChannelSpec
+    wrist_torque: ChannelSpec
+    base_force: ChannelSpec
+    base_torque: ChannelSpec
+    marker_pos: ChannelSpec
+    marker_quat: ChannelSpec
+
+    @classmethod
+    def realistic(cls) -> Arm5SensorSuite:
+        """The JR3 presets at the wrist and under the seat, Vicon marker noise."""
+        return cls(
+            wrist_force=JR3_FORCE,
+            wrist_torque=JR3_TORQUE,
+            base_force=JR3_BASE_FORCE,
+            base_torque=JR3_BASE_TORQUE,
+            marker_pos=VICON_MARKER_POS,
+            marker_quat=VICON_MARKER_QUAT,
         )

@@ -1,6 +1,32 @@
 """Simulation: the held posture, robot IK, batched rollout with reflexes, the simulated lab,
 trials stepped from Python on threads."""
 
+from armlab.sim.arm5_force_task import (
+    A_MIN,
+    PRELOAD_CONDITIONS,
+    ForceTask,
+    force_task_activations,
+    muscle_torque_matrix,
+    preload_conditions,
+)
+from armlab.sim.arm5_measure import (
+    MARKER_RATE_HZ,
+    MeasuredTrials,
+    measure_stiffness_record,
+)
+from armlab.sim.arm5_trials import (
+    AMPLITUDE_RAD,
+    CHUNK_STEPS,
+    PATH_POINTS,
+    RECORDED_SENSORS,
+    StiffnessPlan,
+    StiffnessRecord,
+    TrialTiming,
+    directions,
+    plan_stiffness_trials,
+    settle_conditions,
+    simulate_stiffness_trials,
+)
 from armlab.sim.capstan_lab import CLEAN_UNITS, simulate_capstan
 from armlab.sim.cartesian_level_a import (
     CartesianRecord,
@@ -59,4 +85,24 @@ __all__ = [
     "simulate_level_b",
     "stop_postures",
     "simulate_level_a",
+    "A_MIN",
+    "PRELOAD_CONDITIONS",
+    "ForceTask",
+    "force_task_activations",
+    "muscle_torque_matrix",
+    "preload_conditions",
+    "MARKER_RATE_HZ",
+    "MeasuredTrials",
+    "measure_stiffness_record",
+    "AMPLITUDE_RAD",
+    "CHUNK_STEPS",
+    "PATH_POINTS",
+    "RECORDED_SENSORS",
+    "StiffnessPlan",
+    "StiffnessRecord",
+    "TrialTiming",
+    "directions",
+    "plan_stiffness_trials",
+    "settle_conditions",
+    "simulate_stiffness_trials",
 ]

@@ -64,7 +64,8 @@ def solve_ik(
         scene: the composed scene.
         targets: (n, 3) m, world positions of the cuff contact site.
         q_start: (7,) rad, initial guess for the first target.
-        rotation: (3, 3) world orientation of the flange site.
+        rotation: (3, 3) world orientation of the flange site, or (n, 3, 3) one per target (a
+            6-D cuff that carries the limb's orientation, e.g. :mod:`armlab.models.arm5_scene`).
         q_nominal: (7,) rad, posture the null-space motion tends to (default: q_start).
         tol_m: convergence tolerance on the position error (m; orientation error in rad).
         max_iter: Newton iterations per target.
@@ -83,9 +84,15 @@ def solve_ik(
     q = np.asarray(q_start, float).copy()
     jacp = np.zeros((3, model.nv))
     jacr = np.zeros((3, model.nv))
+    targets = np.asarray(targets, float)
+    rotations = np.asarray(rotation, float)
+    if rotations.shape == (3, 3):
+        rotations = np.broadcast_to(rotations, (len(targets), 3, 3))
+    elif rotations.shape != (len(targets), 3, 3):
+        raise ModelError(f"rotation must be (3, 3) or ({len(targets)}, 3, 3), got {rotations.shape}")
     out = np.empty((len(targets), 7))
     lo, hi = model.jnt_range[model.dof_jntid[cols]].T
-    for n, target in enumerate(np.asarray(targets, float)):
+    for n, (target, rot_n) in enumerate(zip(targets, rotations, strict=True)):
         err = np.inf
         for _ in range(max_iter):
             data.qpos[scene.robot_qpos] = q
@@ -93,7 +100,7 @@ def solve_ik(
             mujoco.mj_comPos(model, data)
             e_p = target - data.site_xpos[scene.contact_site]
             rot = data.site_xmat[scene.flange_site].reshape(3, 3)
-            e_r = 0.5 * np.cross(rot, rotation, axisa=0, axisb=0).sum(axis=0)
+            e_r = 0.5 * np.cross(rot, rot_n, axisa=0, axisb=0).sum(axis=0)
             e = np.concatenate([e_p, e_r])
             err = float(np.max(np.abs(e)))
             if err < tol_m:
