@@ -18,7 +18,7 @@ import numpy as np
 
 from armlab.errors import ModelError
 from armlab.models.arm_5dof import ARM5_JOINTS, ARM5_MUSCLES
-from armlab.models.scene import compile_mjcf, mjcf, model_file, named_id, sensor_slices
+from armlab.models.scene import SensorReadout, compile_mjcf, mjcf, model_file, named_id, sensor_slices
 
 __all__ = [
     "ARM5_LAB_TIMESTEP_S",
@@ -53,7 +53,7 @@ WELD_SOLIMP = (0.99, 0.999, 0.001, 0.5, 2.0)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
-class Arm5Scene:
+class Arm5Scene(SensorReadout):
     """The compiled stiffness lab and its addresses.
 
     Attributes:
@@ -97,17 +97,6 @@ class Arm5Scene:
     ft_pos: np.ndarray
     ft_rot: np.ndarray
     marker_to_wrist: tuple[np.ndarray, np.ndarray]
-
-    def sensor(self, sensordata: np.ndarray, name: str) -> np.ndarray:
-        """Slice one named sensor out of ``(..., nsensordata)`` sensor data."""
-        try:
-            return sensordata[..., self.sensors[name]]
-        except KeyError:
-            raise ModelError(f"scene has no sensor {name!r}; available: {sorted(self.sensors)}") from None
-
-    def sensors_of(self, sensordata: np.ndarray, names: Sequence[str]) -> np.ndarray:
-        """The named sensors side by side, ``(..., total dim)``."""
-        return np.concatenate([self.sensor(sensordata, n) for n in names], axis=-1)
 
 
 def _compose(robot_base_pos: Sequence[float]) -> mjcf.RootElement:

@@ -57,8 +57,31 @@ def model_file(*parts: str) -> Path:
     return path
 
 
+class SensorReadout:
+    """Named reads of MuJoCo sensor data, for a scene holding ``sensors`` (name -> slice into
+    ``sensordata``, :func:`sensor_slices`)."""
+
+    sensors: dict[str, slice]
+
+    def sensor(self, sensordata: np.ndarray, name: str) -> np.ndarray:
+        """Slice one named sensor out of ``(..., nsensordata)`` sensor data."""
+        try:
+            return sensordata[..., self.sensors[name]]
+        except KeyError:
+            raise ModelError(f"scene has no sensor {name!r}; available: {sorted(self.sensors)}") from None
+
+    def sensors_of(self, sensordata: np.ndarray, names: Sequence[str]) -> np.ndarray:
+        """The named sensors side by side, ``(..., total dim)``: a view of ``sensordata`` when they
+        lie one after the other in it (no copy of a large record), else a new array."""
+        parts = [self.sensor(sensordata, n) for n in names]  # checks every name
+        spans = [self.sensors[n] for n in names]
+        if all(a.stop == b.start for a, b in zip(spans, spans[1:], strict=False)):
+            return sensordata[..., spans[0].start : spans[-1].stop]
+        return np.concatenate(parts, axis=-1)
+
+
 @dataclass(frozen=True, kw_only=True, eq=False)
-class Scene:
+class Scene(SensorReadout):
     """A compiled scene and the addresses armlab needs in it.
 
     Attributes:
@@ -92,22 +115,6 @@ class Scene:
     contact_site: int
     hand_site: int
     flange_site: int
-
-    def sensor(self, sensordata: np.ndarray, name: str) -> np.ndarray:
-        """Slice one named sensor out of ``(..., nsensordata)`` sensor data."""
-        try:
-            return sensordata[..., self.sensors[name]]
-        except KeyError:
-            raise ModelError(f"scene has no sensor {name!r}; available: {sorted(self.sensors)}") from None
-
-    def sensors_of(self, sensordata: np.ndarray, names: Sequence[str]) -> np.ndarray:
-        """The named sensors side by side, ``(..., total dim)``: a view of ``sensordata`` when they
-        lie one after the other in it (no copy of a large record), else a new array."""
-        parts = [self.sensor(sensordata, n) for n in names]  # checks every name
-        spans = [self.sensors[n] for n in names]
-        if all(a.stop == b.start for a, b in zip(spans, spans[1:], strict=False)):
-            return sensordata[..., spans[0].start : spans[-1].stop]
-        return np.concatenate(parts, axis=-1)
 
 
 def _compose(arm: ArmConfig, cuff: CuffConfig, robot: RobotConfig, sim: SimConfig) -> mjcf.RootElement:
