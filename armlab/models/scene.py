@@ -63,21 +63,23 @@ class SensorReadout:
 
     sensors: dict[str, slice]
 
-    def sensor(self, sensordata: np.ndarray, name: str) -> np.ndarray:
-        """Slice one named sensor out of ``(..., nsensordata)`` sensor data."""
+    def _span(self, name: str) -> slice:
         try:
-            return sensordata[..., self.sensors[name]]
+            return self.sensors[name]
         except KeyError:
             raise ModelError(f"scene has no sensor {name!r}; available: {sorted(self.sensors)}") from None
+
+    def sensor(self, sensordata: np.ndarray, name: str) -> np.ndarray:
+        """Slice one named sensor out of ``(..., nsensordata)`` sensor data."""
+        return sensordata[..., self._span(name)]
 
     def sensors_of(self, sensordata: np.ndarray, names: Sequence[str]) -> np.ndarray:
         """The named sensors side by side, ``(..., total dim)``: a view of ``sensordata`` when they
         lie one after the other in it (no copy of a large record), else a new array."""
-        parts = [self.sensor(sensordata, n) for n in names]  # checks every name
-        spans = [self.sensors[n] for n in names]
+        spans = [self._span(n) for n in names]
         if all(a.stop == b.start for a, b in zip(spans, spans[1:], strict=False)):
             return sensordata[..., spans[0].start : spans[-1].stop]
-        return np.concatenate(parts, axis=-1)
+        return np.concatenate([sensordata[..., sp] for sp in spans], axis=-1)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)

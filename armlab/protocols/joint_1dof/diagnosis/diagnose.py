@@ -40,6 +40,12 @@ def candidate_names(cfg: DiagnosisConfig) -> list[str]:
     return select_candidates(cfg, JOINT_SURROGATES, "joint_1dof")
 
 
+def _torque_sign(nominal: FittedModel) -> float:
+    """-1 when the recorded torque is antiphase to the angle (the impedance is -torque/position:
+    the nominal's K, summed over trials, is negative), else 1."""
+    return -1.0 if sum(float(np.mean(b[2])) for b in nominal.beta) < 0 else 1.0
+
+
 def _impedance(model: FittedModel, sign: float) -> list[dict]:
     """Per trial, the linear parameters with the torque sign folded in (positive I, B, K)."""
     return [
@@ -117,7 +123,7 @@ def _operating_point(
     time-varying nominal shrinks the gap (:mod:`.time_varying`; docs/diagnosis_schema.md); and the
     stationary nominal fitted for it."""
     stationary = fit_model(trials, y_band, (), hp, family=JOINT_FAMILY)
-    sign = -1.0 if sum(float(np.mean(b[2])) for b in stationary.beta) < 0 else 1.0
+    sign = _torque_sign(stationary)
     scan = scan_operating_point(trials, y_band, hp, band_share=band_share, sign=sign)
     tv = fit_model(trials, y_band, (), hp, family=JOINT_TV_FAMILY)
     gap_s = held_out_gap(stationary, trials, y_band)[0]
@@ -211,8 +217,7 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
         [[]] + [[_OP_EFFECT, *m.effects] for m in sel.stages] if tv else [list(m.effects) for m in models]
     )
     nominal = models[0]
-    k_total = sum(float(np.mean(b[2])) for b in nominal.beta)
-    sign = -1.0 if k_total < 0 else 1.0  # the impedance is -torque/position when antiphase
+    sign = _torque_sign(nominal)
     frf_meas = [frf_parameters(tr, y) for tr, y in zip(trials, y_band, strict=True)]  # once, for every stage
     stages = [
         {**_stage(m, trials, y_band, noise, floor, sign, frf_meas), "effects": label}

@@ -38,6 +38,7 @@ from armlab.diagnosis.report_text import (
     window_meaning,
     xcorr_meaning,
 )
+from armlab.protocols.joint_1dof.diagnosis.report_operating_point import operating_point_section
 from armlab.protocols.joint_1dof.diagnosis.rules import RULES
 
 __all__ = [
@@ -354,54 +355,8 @@ def _how_far(r: Mapping[str, Any], h: str) -> list[str]:
     return out
 
 
-def _operating_point(r: Mapping[str, Any], h: str) -> list[str]:
-    """A time-varying recording's section: does the impedance follow the operating angle."""
-    op = r.get("operating_point")
-    if op is None:
-        return []
-    b = op["binned"]
-    rows = [
-        f"{h} Operating point",
-        "",
-        "The recording carries its operating angle (a perturbation on a slow movement). In "
-        f"{b['bins']} bins of the angle, equal in samples, the nominal's parameters were fitted apart "
-        f"and tested for constancy (p below {b['p_threshold']:g} = varies):",
-        "",
-        "| parameter | unit | lowest bin | highest bin | relative range | p (constant) |",
-        "|---|---|---|---|---|---|",
-    ]
-    for k, p in b["parameters"].items():
-        rows.append(
-            f"| {k} | {p['unit']} | {min(p['values']):.4g} | {max(p['values']):.4g} | "
-            f"{100 * p['relative_range']:.0f} % | {p['p_constant']:.2g} |"
-        )
-    where = op["where"]
-    gaps = (100 * op["stationary_nominal_gap"], 100 * op["time_varying_nominal_gap"])
-    rows += [
-        "",
-        (
-            f"**{where['parameter']}** varies most: from {where['lowest']['value']:.4g} at "
-            f"{where['lowest']['at_rad']:+.3f} rad to {where['highest']['value']:.4g} at "
-            f"{where['highest']['at_rad']:+.3f} rad over the recorded {where['from_rad']:+.3f} … "
-            f"{where['to_rad']:+.3f} rad. "
-            if where
-            else "No parameter varies with the operating angle. "
-        )
-        + f"A nominal whose K and B are quadratics of the angle moves the held-out gap from "
-        f"{gaps[0]:.2f} % to {gaps[1]:.2f} % ({100 * op['explained_fraction']:.0f} % of the excess "
-        "over the noise floor); "
-        + (
-            "the diagnosis therefore starts from that time-varying nominal (verdict "
-            "`operating_point_impedance`), and the effects after it are scored on top of it."
-            if op["varies"]
-            else "that is not enough to accept it, and the diagnosis starts from the stationary nominal."
-        ),
-    ]
-    return rows
-
-
 def _one(r: Mapping[str, Any], h: str, settings: Mapping[str, Any] | None) -> list[str]:
-    op = _operating_point(r, h)
+    op = operating_point_section(r, h)
     return [
         verdict_paragraph(r, settings),
         "",
