@@ -279,6 +279,7 @@ def simulate_stiffness_trials(
     timing: TrialTiming = TrialTiming(),
     amplitude: float = AMPLITUDE_RAD,
     nthread: int | None = None,
+    settle_s: float = SETTLE_S,
 ) -> StiffnessRecord:
     """Settle every condition, then step all trials of the plan in batched rollout chunks.
 
@@ -289,6 +290,7 @@ def simulate_stiffness_trials(
         plan: the drawn trials (its condition indices address ``activations``' rows).
         timing: the trial timeline; amplitude: rad the joint displacement.
         nthread: rollout threads (default: all cores).
+        settle_s: s each condition's hold settles before its trials (:func:`settle_conditions`).
 
     Raises:
         SimulationError: a trial diverged or MuJoCo warned.
@@ -298,7 +300,7 @@ def simulate_stiffness_trials(
     acts = np.atleast_2d(np.asarray(activations, float))
     if plan.condition.max() >= len(acts):
         raise ConfigError(f"the plan has {plan.condition.max() + 1} conditions, activations only {len(acts)}")
-    held, robot_q = settle_conditions(scene, kin, q0, acts)
+    held, robot_q = settle_conditions(scene, kin, q0, acts, settle_s)
     n_steps = int(round(timing.record_s / dt))
     onset = int(round(timing.pre_s / dt))
     # sample k is the state after step k + 1, i.e. at (k + 1) dt; the onset at sample `onset`
