@@ -34,8 +34,11 @@ PROTOCOL = Protocol(
     reestimate=hooks.reestimate,
     outputs=hooks.outputs,
     format_table=hooks.format_table,
+    lab_effects={"reflex": "reflex.enabled"},
+    catalogue=("reflex",),
     examples=(
         "run protocol=stiffness_5dof_emg sensors=ideal",
+        "run protocol=stiffness_5dof_emg reflex.enabled=true",
         "run protocol=stiffness_5dof_emg trials.n_per_condition=20 trials.conditions=[Z-10,Z+10]",
         "estimate outputs/stiffness_5dof_emg/<run> estimation.post_interval_s=[0.25,0.4]",
     ),

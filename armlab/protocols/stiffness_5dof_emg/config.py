@@ -12,7 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Literal, get_args
 
-from armlab.config.schema import ExperimentConfig
+from armlab.config.schema import ExperimentConfig, ReflexConfig
 from armlab.config.validate import check, check_tuple_lengths, choice
 from armlab.sim.arm5_force_task import A_MIN, PRELOAD_CONDITIONS
 
@@ -119,6 +119,10 @@ class Stiffness5dofConfig(ExperimentConfig):
     stages: list[str] = field(default_factory=lambda: ["stiffness"])
     trials: TrialsConfig = field(default_factory=TrialsConfig)
     estimation: EstimationConfig = field(default_factory=EstimationConfig)
+    # the stretch reflex (armlab.sim.arm5_reflex): the conditioning lab's law, gains and latencies
+    # (paper 000 Sec. II-B; armlab.config.schema.ReflexConfig), OFF by default: the paper's model
+    # (Eq. (14)) freezes activation; on, spec 001's check 7 measures its bias
+    reflex: ReflexConfig = field(default_factory=lambda: ReflexConfig(enabled=False))
 
     def __post_init__(self) -> None:
         super().__post_init__()

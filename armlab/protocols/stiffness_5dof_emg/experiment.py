@@ -28,6 +28,7 @@ from armlab.protocols.stiffness_5dof_emg.config import Stiffness5dofConfig
 from armlab.sensors.presets import Arm5SensorSuite
 from armlab.sim.arm5_force_task import PRELOAD_CONDITIONS, force_task_activations
 from armlab.sim.arm5_measure import MARKER_RATE_HZ, measure_stiffness_record
+from armlab.sim.arm5_reflex import reflex_stiffness_fd
 from armlab.sim.arm5_trials import (
     TrialTiming,
     plan_stiffness_trials,
@@ -102,7 +103,7 @@ def simulate_stiffness_stage(cfg: Stiffness5dofConfig, lab: StiffnessLab | None 
         post_interval=tuple(cfg.estimation.post_interval_s),
     )
     record = simulate_stiffness_trials(
-        scene, kin, arm.q0, acts, plan, timing, tc.amplitude_rad, settle_s=cfg.sim.settle_s
+        scene, kin, arm.q0, acts, plan, timing, tc.amplitude_rad, settle_s=cfg.sim.settle_s, reflex=cfg.reflex
     )
     suite = Arm5SensorSuite.ideal() if cfg.sensors.preset == "ideal" else Arm5SensorSuite.realistic()
     meas = measure_stiffness_record(record, suite, rng, t0_s=plan.wait_s)
@@ -113,12 +114,30 @@ def simulate_stiffness_stage(cfg: Stiffness5dofConfig, lab: StiffnessLab | None 
     channels["forearm_marker_quat"] = hold_markers(meas.marker_quat, step, n_samples)
     channels["true_q"] = record.channels["true_q"]
     geo = WristSensorGeometry.from_scene(scene)
+    K_int = analytic_stiffness(arm, acts)
+    K_reflex = np.array(
+        [
+            reflex_stiffness_fd(
+                arm.model,
+                arm.muscle_act,
+                arm.muscle_actadr,
+                arm.qpos,
+                arm.dof,
+                arm.q0,
+                a,
+                cfg.reflex,
+                tc.amplitude_rad,
+            )
+            for a in acts
+        ]
+    )
     r_off, p_off = scene.marker_to_wrist
     attrs = {
         "protocol": cfg.protocol_name,
         "seed": int(cfg.seed),
         "stages": list(cfg.stages),
         "sensor_preset": cfg.sensors.preset,
+        "reflex_enabled": bool(cfg.reflex.enabled),
         "marker_fs_hz": MARKER_RATE_HZ,
         "q0_rad": np.asarray(arm.q0, float),
         "amplitude_rad": float(tc.amplitude_rad),
@@ -137,7 +156,11 @@ def simulate_stiffness_stage(cfg: Stiffness5dofConfig, lab: StiffnessLab | None 
             "activation": acts,
             # linear muscles with constant moment arms: K_q = sum a_i k_i r_i r_i^T + K_passive,
             # exact and posture independent (armlab.models.arm5_truth)
-            "K_intrinsic_Nm_per_rad": analytic_stiffness(arm, acts),
+            "K_intrinsic_Nm_per_rad": K_int,
+            # the static reflex's secant stiffness over the amplitude (zero when off) and intrinsic
+            # + reflex: the truth a static estimate measures with the reflex on (armlab.sim.arm5_reflex)
+            "K_reflex_Nm_per_rad": K_reflex,
+            "K_effective_Nm_per_rad": K_int + K_reflex,
             "D_intrinsic_Nms_per_rad": analytic_damping(arm, acts),
             # the inertial stage is not built: its result, xi_red, is taken from the truth
             "xi_red": inertial_truth(arm).xi_red,
