@@ -48,6 +48,7 @@ bench: $(STAMP)
 	$(BIN)/python benchmarks/bench_protocol.py
 	$(BIN)/python benchmarks/bench_fractional.py
 	$(BIN)/python benchmarks/bench_realtime.py
+	$(BIN)/python benchmarks/bench_stiffness5.py
 	$(BIN)/python benchmarks/bench_diagnosis.py
 
 lint: $(STAMP)

@@ -7,7 +7,7 @@ Reduced trial count: 20 disturbances per condition (2 per direction) instead of 
 keep the suite fast (~4 s of stepping instead of ~9 s). With ideal sensors the error is a
 deterministic settling bias (the same at 20 and 50 trials: 0.1-0.3 %, measured); with realistic
 sensors the noise part grows as 1/sqrt(N), so 20 trials test the tolerances more severely than 50.
-(Check 7, the reflex bias: the 5-DoF arm has no reflex path yet; its activations are frozen.)"""
+(Check 7, the reflex bias: tests/test_stiffness5_protocol.py; here the activations are frozen.)"""
 
 from __future__ import annotations
 

@@ -20,6 +20,7 @@ from armlab.protocols import (
     conditioning_window,
     fractional_elbow,
     joint_1dof,
+    stiffness_5dof_emg,
     virtual_force_sensor,
 )
 from armlab.protocols.base import Protocol
@@ -116,6 +117,7 @@ register(fractional_elbow.PROTOCOL)
 register(virtual_force_sensor.PROTOCOL)
 register(joint_1dof.PROTOCOL)
 register(cartesian_online.PROTOCOL)
+register(stiffness_5dof_emg.PROTOCOL)
 
 #: what ``armlab run`` runs when no protocol is given (and ``make run``)
 DEFAULT_PROTOCOL = conditioning_window.PROTOCOL.name

@@ -14,6 +14,11 @@ from armlab.sim.arm5_measure import (
     MeasuredTrials,
     measure_stiffness_record,
 )
+from armlab.sim.arm5_reflex import (
+    muscle_length_jacobian,
+    reflex_history,
+    reflex_stiffness_fd,
+)
 from armlab.sim.arm5_trials import (
     AMPLITUDE_RAD,
     CHUNK_STEPS,
@@ -94,6 +99,9 @@ __all__ = [
     "MARKER_RATE_HZ",
     "MeasuredTrials",
     "measure_stiffness_record",
+    "muscle_length_jacobian",
+    "reflex_history",
+    "reflex_stiffness_fd",
     "AMPLITUDE_RAD",
     "CHUNK_STEPS",
     "PATH_POINTS",

@@ -26,11 +26,15 @@ import numpy as np
 from mujoco import rollout as mj_rollout
 from scipy.interpolate import CubicSpline
 
+from armlab.config.schema import ReflexConfig
 from armlab.errors import ConfigError
 from armlab.models.arm5_scene import Arm5Scene
 from armlab.models.limb_kinematics import LimbKinematics
 from armlab.perturbations.quintic import quintic_profile
+from armlab.sim import _chunk_kernel as kernel
+from armlab.sim.arm5_reflex import muscle_length_jacobian, reflex_history
 from armlab.sim.robot_ik import nominal_robot_posture, solve_ik
+from armlab.sim.rollout import REFLEX_LENGTH_SCALE_M
 from armlab.sim.stability import TrialLabels, check_rollout, warning_counts
 
 __all__ = [
@@ -279,6 +283,8 @@ def simulate_stiffness_trials(
     timing: TrialTiming = TrialTiming(),
     amplitude: float = AMPLITUDE_RAD,
     nthread: int | None = None,
+    settle_s: float = SETTLE_S,
+    reflex: ReflexConfig | None = None,
 ) -> StiffnessRecord:
     """Settle every condition, then step all trials of the plan in batched rollout chunks.
 
@@ -289,6 +295,11 @@ def simulate_stiffness_trials(
         plan: the drawn trials (its condition indices address ``activations``' rows).
         timing: the trial timeline; amplitude: rad the joint displacement.
         nthread: rollout threads (default: all cores).
+        settle_s: s each condition's hold settles before its trials (:func:`settle_conditions`).
+        reflex: the stretch reflex (:mod:`armlab.sim.arm5_reflex`); None or ``enabled=False``:
+            activations frozen at the force task's. On, the rollout chunks are no longer than its
+            shorter latency and each chunk's muscle commands come from the stretch already stepped,
+            relative to each trial's posture at the start of its record.
 
     Raises:
         SimulationError: a trial diverged or MuJoCo warned.
@@ -298,7 +309,7 @@ def simulate_stiffness_trials(
     acts = np.atleast_2d(np.asarray(activations, float))
     if plan.condition.max() >= len(acts):
         raise ConfigError(f"the plan has {plan.condition.max() + 1} conditions, activations only {len(acts)}")
-    held, robot_q = settle_conditions(scene, kin, q0, acts)
+    held, robot_q = settle_conditions(scene, kin, q0, acts, settle_s)
     n_steps = int(round(timing.record_s / dt))
     onset = int(round(timing.pre_s / dt))
     # sample k is the state after step k + 1, i.e. at (k + 1) dt; the onset at sample `onset`
@@ -320,10 +331,40 @@ def simulate_stiffness_trials(
         ),
         hint="the 6-D cuff weld or the robot servos cannot follow the path (models/arm_5dof/cuff_6d.xml)",
     )
+    reflex_on = reflex is not None and reflex.enabled
+    chunk = CHUNK_STEPS
+    if reflex_on:
+        lag_s = int(round(reflex.stretch_latency_s / dt))
+        lag_sp = int(round(reflex.spinal_latency_s / dt))
+        chunk = max(1, lag_s)  # a chunk's commands read only stretch already stepped
+        R = muscle_length_jacobian(model, scene.muscle_act, scene.arm_qpos, np.asarray(q0, float))
+        q_cols, qd_cols = 1 + scene.arm_qpos, 1 + model.nq + scene.arm_dof  # full-physics layout
+        q_ref = state[:, q_cols].copy()
+        hist = np.zeros((n, lag_sp + chunk, 2 * R.shape[0]))
+        base3 = np.ascontiguousarray(acts[plan.condition][:, None, :])
+        muscle_cols = np.asarray(scene.muscle_act, dtype=np.intp)
+        zero_ref = np.zeros(R.shape[0])
     with mj_rollout.Rollout(nthread=len(datas)) as runner:
-        for c0 in range(0, n_steps, CHUNK_STEPS):
-            m = min(CHUNK_STEPS, n_steps - c0)
-            chunk_ctrl = ctrl[:, :m]
+        for c0 in range(0, n_steps, chunk):
+            m = min(chunk, n_steps - c0)
+            if reflex_on:
+                chunk_ctrl = np.zeros((n, m, model.nu))
+                kernel.muscle_commands(
+                    chunk_ctrl,
+                    muscle_cols,
+                    base3,
+                    c0,
+                    hist,
+                    lag_s,
+                    lag_sp,
+                    zero_ref,
+                    REFLEX_LENGTH_SCALE_M,
+                    reflex.stretch_gain,
+                    reflex.velocity_gain,
+                    reflex.spinal_gain,
+                )
+            else:
+                chunk_ctrl = ctrl[:, :m]
             chunk_ctrl[:, :, scene.robot_act] = paths[plan.direction, c0 : c0 + m]
             states, sd = runner.rollout([model] * n, datas, state, np.ascontiguousarray(chunk_ctrl), nstep=m)
             check_rollout(
@@ -335,6 +376,8 @@ def simulate_stiffness_trials(
                 np.arange(c0 + 1, c0 + m + 1) * dt - timing.pre_s,
                 warned=warning_counts(datas),
             )
+            if reflex_on:
+                reflex_history(hist, states, c0, q_cols, qd_cols, q_ref, R)
             out[:, c0 : c0 + m] = sd[:, :, keep]
             state = np.ascontiguousarray(states[:, -1])
     channels: dict[str, np.ndarray] = {}

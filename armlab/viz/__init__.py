@@ -37,6 +37,8 @@ from armlab.viz.recording import (
     view_command,
     write_recording,
 )
+from armlab.viz.stiffness5 import format_stiffness5_table, plot_stiffness5_figures
+from armlab.viz.stiffness5_recording import write_stiffness5_recording
 from armlab.viz.vfs import format_vfs_tables, plot_vfs_figures, write_vfs_recording
 
 __all__ = [
@@ -65,4 +67,7 @@ __all__ = [
     "cond_diagnosis_recording",
     "diagnosis_figures",
     "diagnosis_recording",
+    "format_stiffness5_table",
+    "plot_stiffness5_figures",
+    "write_stiffness5_recording",
 ]

@@ -1,0 +1,54 @@
+"""The checks of a ``stiffness_5dof_emg`` config that need no simulation (``Protocol.validate``).
+
+Run by :func:`armlab.protocols.compose.compose`, so ``armlab run`` refuses before its run folder
+exists: the lab's fixed physics step and recording rate (the composed lab's MJCF sets them), the
+averaging intervals against the trial's record, and the force task of every chosen condition.
+"""
+
+from __future__ import annotations
+
+from armlab.config.validate import check
+from armlab.errors import ConfigError
+from armlab.models.arm5_scene import ARM5_LAB_TIMESTEP_S
+from armlab.protocols.stiffness_5dof_emg.config import Stiffness5dofConfig
+from armlab.sim.arm5_trials import TrialTiming
+
+__all__ = ["LAB_FS_HZ", "LAB_INTEGRATOR", "validate"]
+
+#: Hz, the F/T channels' rate (paper Sec. 3: JR3 at 2 kHz): one sample per physics step
+LAB_FS_HZ = 1.0 / ARM5_LAB_TIMESTEP_S
+#: the lab's integrator (armlab.models.arm5_scene: the servos' velocity gains integrated implicitly)
+LAB_INTEGRATOR = "implicitfast"
+
+
+def validate(cfg: Stiffness5dofConfig) -> None:
+    """Raise :class:`ConfigError` on a setting the stiffness stage cannot run."""
+    check(
+        abs(cfg.sim.timestep_s - ARM5_LAB_TIMESTEP_S) < 1e-12,
+        f"sim.timestep_s={cfg.sim.timestep_s:g} s: the 5-DoF stiffness lab steps at "
+        f"{ARM5_LAB_TIMESTEP_S:g} s (one step per 2 kHz F/T sample); valid: {ARM5_LAB_TIMESTEP_S:g}",
+    )
+    check(
+        abs(cfg.sensors.fs_hz - LAB_FS_HZ) < 1e-9,
+        f"sensors.fs_hz={cfg.sensors.fs_hz:g} Hz: the paper records its JR3s at 2 kHz (Sec. 3); "
+        f"valid: {LAB_FS_HZ:g}",
+    )
+    check(
+        cfg.sim.integrator == LAB_INTEGRATOR,
+        f"sim.integrator={cfg.sim.integrator!r}: the lab's robot servos need {LAB_INTEGRATOR!r}; "
+        f"valid: [{LAB_INTEGRATOR!r}]",
+    )
+    t, e = cfg.trials, cfg.estimation
+    try:
+        TrialTiming(
+            pre_s=t.pre_s,
+            rise_s=t.rise_s,
+            hold_s=t.hold_s,
+            pre_interval=tuple(e.pre_interval_s),
+            post_interval=tuple(e.post_interval_s),
+        )
+    except ConfigError as exc:
+        raise ConfigError(
+            f"estimation.pre_interval_s / post_interval_s do not fit the record set by trials.pre_s, "
+            f"rise_s, hold_s: {exc}"
+        ) from None

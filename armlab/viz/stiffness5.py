@@ -1,0 +1,124 @@
+"""Table and figures of the 5-DoF stiffness protocol (seeds/001, stiffness stage).
+
+- :func:`format_stiffness5_table`: per pre-load condition the relative error of K̂_q against the
+  truth, its smallest eigenvalue, the ellipsoid's major-axis error and its angle to the pre-load;
+  then spec 001's acceptance checks with their tolerances.
+- :func:`plot_stiffness5_figures`: ``kq_per_condition.png`` (the 15 unique entries of K_q per
+  condition: estimate with the least-squares standard error against the truth) and
+  ``ellipsoids_xz.png`` (the Fig. 3 stiffness ellipsoids projected on the X-Z plane, at each
+  condition's pre-load force, estimate against truth).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from armlab.errors import DataError
+from armlab.viz._paths import save_png
+
+__all__ = ["format_stiffness5_table", "plot_stiffness5_figures"]
+
+_JOINTS = ("sh flex", "sh abd", "sh rot", "elbow", "pron")
+
+
+def format_stiffness5_table(results: Mapping[str, Any]) -> str:
+    """The results of a stiffness-stage run as text (module docstring)."""
+    rows = results.get("conditions") or []
+    if not rows:
+        raise DataError("results hold no condition to tabulate")
+    truth = results.get("truth", "intrinsic")
+    lines = [
+        f"K_q per condition ({results.get('sensor_preset', '?')} sensors; truth: {truth})",
+        "  condition  trials  |K-K_true|/|K_true|  lambda_min  major axis err  to pre-load (est / true)",
+    ]
+    for r in rows:
+        lines.append(
+            f"  {r['condition']:9s}  {r['n_trials']:6d}  {100 * r['rel_error']:17.2f} %  "
+            f"{r['min_eigenvalue_Nm_per_rad']:10.2f}  {r['major_axis_error_deg']:12.2f} deg  "
+            f"{r['major_axis_to_preload_deg']:6.1f} / {r['true_major_axis_to_preload_deg']:.1f} deg"
+        )
+        if "diag_bias_vs_intrinsic_Nm_per_rad" in r:
+            lines.append(
+                "             diagonal K_hat - K_intrinsic (N m/rad): "
+                + " ".join(f"{v:+.2f}" for v in r["diag_bias_vs_intrinsic_Nm_per_rad"])
+            )
+    lines.append("spec 001 acceptance checks")
+    for c in results.get("checks", []):
+        mark = "PASS" if c["passed"] else "FAIL"
+        lines.append(f"  {c['check']}  {c['what']}: {c['value']:.4g} (tolerance {c['tolerance']:g})  {mark}")
+    return "\n".join(lines)
+
+
+def _plot_kq(series: Mapping[str, Any]) -> Figure:
+    names = list(series["names"])
+    k_hat, k_true = np.asarray(series["K_hat"]), np.asarray(series["K_true"])
+    k_std = np.asarray(series["K_ls_std"])
+    x = np.arange(len(names))
+    fig = Figure(figsize=(13, 11), constrained_layout=True)
+    axes = fig.subplots(5, 5, sharex=True)
+    for i in range(5):
+        for j in range(5):
+            ax = axes[i, j]
+            if j < i:
+                ax.set_axis_off()
+                continue
+            ax.plot(x, k_true[:, i, j], "s", color="0.55", ms=6, label="truth")
+            ax.errorbar(
+                x,
+                k_hat[:, i, j],
+                yerr=k_std[:, i, j],
+                fmt="o",
+                color="tab:orange",
+                ms=4,
+                label="SPD estimate",
+            )
+            ax.set_title(f"K[{_JOINTS[i]}, {_JOINTS[j]}]", fontsize=8)
+            ax.tick_params(labelsize=7)
+            ax.set_xticks(x, names, rotation=90, fontsize=7)
+    axes[0, 0].set_ylabel("N m/rad")
+    axes[0, 0].legend(fontsize=7)
+    fig.suptitle("Joint stiffness K_q per pre-load condition: SPD estimate (± LS standard error) vs truth")
+    return fig
+
+
+def _plot_ellipses(series: Mapping[str, Any]) -> Figure:
+    names = list(series["names"])
+    hat, true = np.asarray(series["ellipse_hat"]), np.asarray(series["ellipse_true"])
+    forces = np.asarray(series["forces"])
+    fig = Figure(figsize=(7, 7), constrained_layout=True)
+    ax = fig.add_subplot()
+    colours = [f"C{c % 10}" for c in range(len(names))]
+    for c, name in enumerate(names):
+        ax.plot(true[c, :, 0], true[c, :, 1], "--", color="0.5", lw=1.0, label="truth" if c == 0 else None)
+        ax.plot(hat[c, :, 0], hat[c, :, 1], color=colours[c], lw=1.5, label=name)
+        ax.plot(forces[c, 0], forces[c, 2], "+", color=colours[c])
+    ax.set_aspect("equal")
+    ax.set_xlabel("F_x (N)")
+    ax.set_ylabel("F_z (N)")
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=8, loc="best")
+    ax.set_title("Stiffness ellipsoids (5 mm sphere) in the X-Z plane at each pre-load (cf. Fig. 3)")
+    return fig
+
+
+def plot_stiffness5_figures(series: Mapping[str, Any], out_dir: str | Path) -> dict[str, Path]:
+    """Write ``kq_per_condition.png`` and ``ellipsoids_xz.png`` into ``out_dir``.
+
+    Args:
+        series: ``names`` (n_c,), ``K_hat``/``K_ls_std``/``K_true`` (n_c, 5, 5) N m/rad,
+            ``forces`` (n_c, 3) N, ``ellipse_hat``/``ellipse_true`` (n_c, m, 2) N X-Z outlines.
+        out_dir: the run directory (the files must not exist).
+
+    Returns:
+        ``{"kq_per_condition": path, "ellipsoids_xz": path}``.
+    """
+    out = Path(out_dir)
+    return {
+        "kq_per_condition": save_png(_plot_kq(series), out / "kq_per_condition.png"),
+        "ellipsoids_xz": save_png(_plot_ellipses(series), out / "ellipsoids_xz.png"),
+    }
