@@ -206,11 +206,15 @@ def test_first_bad_step_finds_a_non_finite_state_and_a_clock_that_jumped():
     assert first_bad_step(time_in, late, dt) == m
 
 
-@pytest.mark.parametrize("base_shape", [(1, 1, 6), (3, 1, 6), (3, 30, 6)])
-def test_compiled_reflex_commands_equal_reflex_command_bit_for_bit(base_shape):
+@pytest.mark.parametrize(
+    ("base_shape", "hold"),
+    [((1, 1, 6), 1), ((3, 1, 6), 1), ((3, 30, 6), 1), ((3, 10, 6), 3), ((3, 15, 6), 2)],
+)
+def test_compiled_reflex_commands_equal_reflex_command_bit_for_bit(base_shape, hold):
     # the kernel reads a ring of the last steps (step j in row j % depth) and the steady state before
     # step 0; reflex_command reads the same values gathered into arrays. Random stretch of both signs,
-    # a base that makes some commands clip at 0 and 1, chunks before, across and after step 0's lags.
+    # a base that makes some commands clip at 0 and 1, chunks before, across and after step 0's lags;
+    # a per-step base whose rows each hold `hold` steps (one command per sample of `hold` steps).
     from armlab.sim._chunk_kernel import muscle_commands, store_history
     from armlab.sim.rollout import REFLEX_LENGTH_SCALE_M, reflex_command
 
@@ -234,6 +238,7 @@ def test_compiled_reflex_commands_equal_reflex_command_bit_for_bit(base_shape):
             ctrl,
             cols,
             base,
+            hold,
             c0,
             ring,
             lag_s,
@@ -244,7 +249,7 @@ def test_compiled_reflex_commands_equal_reflex_command_bit_for_bit(base_shape):
             reflex.velocity_gain,
             reflex.spinal_gain,
         )
-        b = base[:, t] if base_shape[1] > 1 else base
+        b = base[:, t // hold] if base_shape[1] > 1 else base
         expected = reflex_command(
             b,
             np.stack([lagged(lengths, t, lag, ref) for lag in (lag_s, lag_sp)]),
@@ -277,3 +282,17 @@ def test_the_preload_loads_every_kernel_in_the_types_the_simulation_passes(lab):
     encoders = lab.scene.sensors_of(res.sensordata, [f"lwr_q{i}" for i in range(1, 8)])
     RobotKinematics.from_scene(lab.scene).forward(encoders)
     assert [list(k.signatures) for k in kernels] == loaded
+
+
+def test_held_rows_equal_the_repeated_commands():
+    # without a reflex each chunk copies its steps of a per-sample base held over `hold` steps; the
+    # slice must equal the (n, n_steps, k) repeat it replaces, for chunks cut anywhere in a sample
+    from armlab.sim.rollout import _held_rows
+
+    base = np.random.default_rng(2).random((2, 7, 3))
+    for hold in (1, 2, 3):
+        full = np.repeat(base, hold, axis=1)
+        n_steps = full.shape[1] - (hold - 1)  # the last sample held only partly
+        for c0 in range(n_steps):
+            for c1 in range(c0 + 1, n_steps + 1):
+                assert_array_equal(_held_rows(base, hold, c0, c1), full[:, c0:c1])

@@ -36,6 +36,7 @@ def muscle_commands(
     ctrl: np.ndarray,
     cols: np.ndarray,
     base: np.ndarray,
+    hold: int,
     c0: int,
     hist: np.ndarray,
     lag_s: int,
@@ -48,9 +49,10 @@ def muscle_commands(
 ) -> None:
     """The reflex commands of chunk [c0, c0 + m) into ``ctrl[:, :, cols]``.
 
-    ``base``: (1 or n, 1 or n_steps, n_muscles) commands without reflex (one row / one step
-    broadcast). ``hist``: (n, h, 2 n_muscles) ring of the muscle lengths then velocities of the
-    last ``h`` >= ``lag_sp`` steps stepped (step j in row j % h, :func:`store_history`); a lagged
+    ``base``: (1 or n, 1 or ceil(n_steps / hold), n_muscles) commands without reflex (one row / one
+    step broadcast), each row held over ``hold`` physics steps (step t reads row t // hold).
+    ``hist``: (n, h, 2 n_muscles) ring of the muscle lengths then velocities of the last ``h`` >=
+    ``lag_sp`` steps stepped (step j in row j % h, :func:`store_history`); a lagged
     index before step 0 reads the steady state (length ``ref``, velocity 0).
 
     The command is ``clip(base + g_s [stretch]_+ + g_v [rate]_+ + g_sp [spinal stretch]_+, 0, 1)``;
@@ -65,7 +67,7 @@ def muscle_commands(
         bi = i if per_trial else 0
         for s in range(ctrl.shape[1]):
             t = c0 + s
-            bs = t if per_step else 0
+            bs = t // hold if per_step else 0
             j1 = t - lag_s
             j2 = t - lag_sp
             for k in range(nm):
@@ -122,6 +124,6 @@ def load() -> None:
     ctrl, ring = np.zeros((1, 1, 2)), np.zeros((1, 2, 2))
     one = np.zeros(1, dtype=np.intp)
     robot_targets(ctrl, one, np.zeros((1, 1, 1)), one, 0)
-    muscle_commands(ctrl, one, np.zeros((1, 1, 1)), 0, ring, 1, 1, np.zeros(1), 1.0, 0.0, 0.0, 0.0)
+    muscle_commands(ctrl, one, np.zeros((1, 1, 1)), 1, 0, ring, 1, 1, np.zeros(1), 1.0, 0.0, 0.0, 0.0)
     store_history(ring, np.zeros((1, 1, 2)), np.arange(2, dtype=np.intp), 0)
     first_bad_step(np.ones(1), np.ones((1, 1, 2)), 1.0)

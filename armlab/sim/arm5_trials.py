@@ -353,6 +353,7 @@ def simulate_stiffness_trials(
                     chunk_ctrl,
                     muscle_cols,
                     base3,
+                    1,
                     c0,
                     hist,
                     lag_s,

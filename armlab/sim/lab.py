@@ -31,7 +31,7 @@ from armlab.sim.hold import HoldState, hand_world, settle
 from armlab.sim.robot_ik import solve_ik
 from armlab.sim.rollout import simulate
 from armlab.sim.stability import TrialLabels, check_bound
-from armlab.sim.subject import commands, fluctuation
+from armlab.sim.subject import fluctuation, sample_commands
 
 __all__ = [
     "CUFF_FORCE_BOUND_N",
@@ -222,8 +222,8 @@ def record_trials(
         q0 = np.asarray(cfg.arm.q0, float)
         paths, path_of = robot_target_paths(scene, hold, q0, plan, scenario.directions_rad, t_rel)
         muscle_base = hold.activation
-        if active:
-            muscle_base = commands(hold.activation, drawing.result(), n_steps, substeps)
+        if active:  # one command per sample, held over its physics steps by the rollout
+            muscle_base = sample_commands(hold.activation, drawing.result())
     who = TrialLabels(
         protocol=cfg.protocol_name,
         labels=tuple(
@@ -239,7 +239,15 @@ def record_trials(
     with ThreadPoolExecutor(max_workers=1) as loader:
         loaded = loader.submit(load_compiled)
         sim = simulate(
-            scene, hold.state, paths, muscle_base, cfg.reflex, substeps=substeps, who=who, target_rows=path_of
+            scene,
+            hold.state,
+            paths,
+            muscle_base,
+            cfg.reflex,
+            substeps=substeps,
+            who=who,
+            target_rows=path_of,
+            muscle_hold=substeps,
         )
         loaded.result()
 

@@ -112,6 +112,12 @@ def _as_slice(cols: np.ndarray) -> slice | np.ndarray:
     return cols
 
 
+def _held_rows(base: np.ndarray, hold: int, c0: int, c1: int) -> np.ndarray:
+    """Steps [c0, c1) of ``base`` (n, rows, k) whose rows each hold ``hold`` steps: (n, c1 - c0, k)."""
+    r0, r1 = c0 // hold, -(-c1 // hold)
+    return np.repeat(base[:, r0:r1], hold, axis=1)[:, c0 - r0 * hold : c1 - r0 * hold]
+
+
 def simulate(
     scene: Scene,
     initial_state: np.ndarray,
@@ -123,6 +129,7 @@ def simulate(
     nthread: int | None = None,
     who: TrialLabels | None = None,
     target_rows: np.ndarray | None = None,
+    muscle_hold: int = 1,
 ) -> SimResult:
     """Simulate a batch of trials from one settled state.
 
@@ -131,9 +138,9 @@ def simulate(
         initial_state: (nstate,) full-physics state every trial starts from.
         robot_targets: (n_trials, n_steps, 7) rad robot joint targets at every physics step, or
             (n_paths, n_steps, 7) with ``target_rows``.
-        muscle_base: (6,) activation commands without reflex, or (n_trials, n_steps, 6) per trial
-            and physics step (a subject whose activation fluctuates, see
-            :mod:`armlab.sim.subject`).
+        muscle_base: (6,) activation commands without reflex, or (n_trials, ceil(n_steps /
+            muscle_hold), 6) per trial and step of ``muscle_hold`` physics steps (a subject whose
+            activation fluctuates, drawn per sample, see :mod:`armlab.sim.subject`).
         reflex: reflex pathways (``enabled=False`` for none).
         substeps: physics steps per recorded sample.
         nthread: rollout threads (default: all cores).
@@ -141,6 +148,8 @@ def simulate(
         target_rows: (n_trials,) the row of ``robot_targets`` each trial follows (trials sharing
             a path share a row: each chunk gathers its targets, no (n_trials, n_steps, 7) copy);
             None: row i for trial i.
+        muscle_hold: physics steps each row of a per-step ``muscle_base`` holds (e.g. ``substeps``:
+            one command per sample, no (n_trials, n_steps, 6) copy).
 
     Returns:
         The clean signals, sampled every ``substeps`` steps.
@@ -166,10 +175,13 @@ def simulate(
         n_trials = target_rows.size
     muscle_base = np.asarray(muscle_base, float)
     per_step = muscle_base.ndim == 3
-    if per_step and muscle_base.shape != (n_trials, n_steps, len(MUSCLES)):
+    if muscle_hold < 1:
+        raise SimulationError(f"muscle_hold must be >= 1 physics step, got {muscle_hold}")
+    n_rows = -(-n_steps // muscle_hold)
+    if per_step and muscle_base.shape != (n_trials, n_rows, len(MUSCLES)):
         raise SimulationError(
-            f"muscle_base must be ({len(MUSCLES)},) or {(n_trials, n_steps, len(MUSCLES))}, "
-            f"got {muscle_base.shape}"
+            f"muscle_base must be ({len(MUSCLES)},) or {(n_trials, n_rows, len(MUSCLES))} "
+            f"(one row per {muscle_hold} physics step(s)), got {muscle_base.shape}"
         )
     dt = model.opt.timestep
     if who is None:
@@ -267,6 +279,7 @@ def simulate(
                     ctrl,
                     muscle_cols,
                     base3,
+                    muscle_hold,
                     c0,
                     hist,
                     lag_s,
@@ -278,7 +291,9 @@ def simulate(
                     reflex.spinal_gain,
                 )
             else:
-                ctrl[:, :, muscle_cols] = muscle_base[:, c0:c1] if per_step else muscle_base
+                ctrl[:, :, muscle_cols] = (
+                    _held_rows(muscle_base, muscle_hold, c0, c1) if per_step else muscle_base
+                )
             step_args = dict(nstep=m, state=states, sensordata=sd, skip_checks=True)
             stepping = stepper.submit(runner.rollout, models, data, state, ctrl, **step_args)
             try:

@@ -11,7 +11,7 @@ import numpy as np
 from armlab.config.subject import SubjectConfig
 from armlab.dsp import lowpass_noise
 
-__all__ = ["BURN_IN_PERIODS", "activation_commands", "commands", "fluctuation"]
+__all__ = ["BURN_IN_PERIODS", "activation_commands", "commands", "fluctuation", "sample_commands"]
 
 # periods of the low-pass corner drawn and dropped before the record starts, so that the
 # fluctuation is stationary from the first sample (the filter's start-up transient is gone)
@@ -53,11 +53,15 @@ def fluctuation(
     return 1.0 + subject.trial_cv * eta[:, None, None] + subject.fluctuation_cv * eps
 
 
+def sample_commands(base: np.ndarray, rel: np.ndarray) -> np.ndarray:
+    """(n_trials, n_samples, n_muscles) commands in [0, 1] of every sample: ``base · rel`` clipped."""
+    return np.clip(np.asarray(base, float) * rel, 0.0, 1.0)
+
+
 def commands(base: np.ndarray, rel: np.ndarray, n_steps: int, substeps: int) -> np.ndarray:
-    """(n_trials, n_steps, n_muscles) commands in [0, 1]: ``base · rel`` clipped, each sample's value
+    """(n_trials, n_steps, n_muscles) commands in [0, 1]: :func:`sample_commands`, each sample's value
     held over its ``substeps`` physics steps (the activation dynamics smooth the steps)."""
-    cmd = np.clip(np.asarray(base, float) * rel, 0.0, 1.0)
-    return np.repeat(cmd, substeps, axis=1)[:, :n_steps]
+    return np.repeat(sample_commands(base, rel), substeps, axis=1)[:, :n_steps]
 
 
 def activation_commands(
