@@ -19,6 +19,7 @@ from armlab.config.schema import ExperimentConfig, SensorsConfig
 from armlab.config.validate import check, choice
 
 __all__ = [
+    "HAND_MASS_MIN_KG",
     "IDENTIFICATION_CHOICES",
     "CartesianOnlineConfig",
     "IdentificationConfig",
@@ -33,6 +34,14 @@ SimulationLevel = Literal["A", "B"]
 #: Exp. 4 estimators: the thesis's Eq. 3.4.1 (constant damping columns) and the model's own D = δ√K.
 Exp4Method = Literal["linear", "sqrt_damping"]
 IDENTIFICATION_CHOICES: tuple[str, ...] = get_args(Exp4Method)
+
+#: kg, the lightest level-B hand accepted. The field is an explicit force on the hand (evaluated
+#: at the start of each step), and the cuff's connect constraint, whose stiffness MuJoCo scales by
+#: the effective mass, holds a light hand less and less. Measured on Exp. 4 at the default 0.5 ms
+#: step and Table 3.1's stiffness: at 10 g the hand's peak acceleration is 1.8 m/s² (as at 0.966 kg);
+#: at 1 g the hand vibrates against the cuff (357 m/s²), which halving the step removes
+#: (sqrt(K/m)·dt = 2.7 at 1 g, beyond the explicit limit of 2; 0.87 at 10 g).
+HAND_MASS_MIN_KG = 0.01
 
 if TYPE_CHECKING:
     Level = SimulationLevel
@@ -56,6 +65,9 @@ class SimulationConfig:
     # N, std of the force noise of the extra Exp. 4 run of spec 002's check 6 (0.05 N); 0 leaves
     # that run out
     noise_study_std_N: float = 0.05
+    # kg, level B's hand (hand + the forearm's share at the wrist: Winter 2009, Table 4.1, 75 kg
+    # subject; models/cartesian_hand/README.md); a test lowers it to show the inertia's effect
+    hand_mass_kg: float = 0.966
     # co-contraction index σ of Eq. 2.2.4 (thesis: never stated; spec 002 assumption 0)
     sigma: float = 0.0
     n_stops: int = 20  # stops over the 100 s path (thesis §3.1-3.5: 20 perturbations/sequences)
@@ -75,6 +87,11 @@ class SimulationConfig:
         for name in ("force_noise_std_N", "noise_study_std_N"):
             value = getattr(self, name)
             check(value >= 0, f"simulation.{name} must be >= 0 N (0 = noise-free), got {value}")
+        check(
+            math.isfinite(self.hand_mass_kg) and self.hand_mass_kg >= HAND_MASS_MIN_KG,
+            f"simulation.hand_mass_kg must be >= {HAND_MASS_MIN_KG:g} kg (default 0.966, Winter 2009), "
+            f"got {self.hand_mass_kg}",
+        )
         check(0.0 <= self.sigma <= 1.0, f"simulation.sigma must lie in [0, 1] (Eq. 2.2.4), got {self.sigma}")
         check(
             isinstance(self.n_stops, int) and 3 <= self.n_stops <= 200,
