@@ -92,6 +92,9 @@ def test_compiled_stepping_equals_a_per_step_python_reference():
     t = np.arange(40)[None, :, None] / 1000.0
     displacement = np.concatenate([0.04 * t * [1, 0], 0.04 * t * [0, -1], 0.04 * t * [1, -1]])
     got = simulate_level_b(scene, THESIS_FIELD, stops, stop_of, displacement, nthread=2)
+    one_thread = simulate_level_b(scene, THESIS_FIELD, stops, stop_of, displacement, nthread=1)
+    for name in ("hand_pos", "hand_vel", "robot_q", "ft_force", "hand_acc", "human_force"):
+        assert_array_equal(getattr(one_thread, name), getattr(got, name))  # a trial owns its MjData
 
     q_stop = stop_postures(scene, stops)
     jac = _jacobians(scene, q_stop)[stop_of]

@@ -30,6 +30,7 @@ from armlab.protocols.cartesian_online.config import (
 )
 from armlab.protocols.cartesian_online.experiment import records_from_trials, simulate_cartesian
 from armlab.protocols.cartesian_online.results import estimate_cartesian
+from armlab.protocols.compose import compose
 from armlab.sim import simulate_level_a
 
 
@@ -130,7 +131,12 @@ def test_estimate_reruns_on_the_trial_file_with_overrides(cli_run, tmp_path, cap
         (["identification.exp4_methods=[cubic]"], "choose one of ['linear', 'sqrt_damping']"),
         (["simulation=level_a", "sensors=realistic"], "level A's sensors are the thesis's ideal ones"),
         (["simulation=level_a", "sim.timestep_s=0.001"], "sim.* is not read at simulation.level=A"),
-        (["simulation=level_b", "sensors=realistic"], "level B always records through its own JR3"),
+        (
+            ["simulation=level_a", "simulation.hand_mass_kg=0.1"],
+            "hand_mass_kg is not read at simulation.level=A",
+        ),
+        (["sensors=realistic"], "level B always records through its own JR3"),  # the default level
+        (["simulation.hand_mass_kg=0.001"], "simulation.hand_mass_kg must be >= 0.01 kg"),
         (["simulation=level_b", "sim.settle_s=0.5"], "sim.settle_s is not read at simulation.level=B"),
         (["effects=[force_sensor_noise]"], "switch them with simulation.force_noise_std_N"),
     ],
@@ -140,6 +146,11 @@ def test_bad_config_values_are_refused_on_one_line(args, message, tmp_path, caps
     err = capsys.readouterr().err.strip()
     assert err.startswith("armlab: error:") and "\n" not in err and message in err, err
     assert not (tmp_path / "r" / "results.json").exists()
+
+
+def test_level_b_is_the_default_and_level_a_selectable():
+    assert compose(["protocol=cartesian_online"])[1].simulation.level == "B"
+    assert compose(["protocol=cartesian_online", "simulation=level_a"])[1].simulation.level == "A"
 
 
 def test_config_refusals_name_the_valid_choices():

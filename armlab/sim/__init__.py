@@ -35,6 +35,7 @@ from armlab.sim.cartesian_level_a import (
 from armlab.sim.cartesian_level_b import (
     SETTLE_S,
     LevelBTrials,
+    load_level_b_compiled,
     simulate_level_b,
     stop_postures,
 )
@@ -82,6 +83,7 @@ __all__ = [
     "CartesianRecord",
     "SETTLE_S",
     "LevelBTrials",
+    "load_level_b_compiled",
     "simulate_level_b",
     "stop_postures",
     "simulate_level_a",

@@ -36,6 +36,7 @@ import numpy as np
 from armlab.errors import ConfigError, SimulationError
 from armlab.models.cartesian_field import QuadraticImpedanceField
 from armlab.models.cartesian_hand_scene import HAND_HEIGHT_M, HandScene
+from armlab.models.robot_fk import RobotKinematics
 from armlab.sim import _level_b_kernel as _kernel
 from armlab.sim.robot_ik import nominal_robot_posture, solve_ik
 from armlab.sim.stability import warning_counts
@@ -43,6 +44,7 @@ from armlab.sim.stability import warning_counts
 __all__ = [
     "SETTLE_S",
     "LevelBTrials",
+    "load_level_b_compiled",
     "simulate_level_b",
     "stop_postures",
 ]
@@ -74,6 +76,14 @@ class LevelBTrials:
     hand_acc: np.ndarray
     human_force: np.ndarray
     fs_hz: float
+
+
+def load_level_b_compiled() -> None:
+    """Load the compiled stepping (:mod:`armlab.sim._level_b_kernel`) and the robot's forward
+    kinematics (:mod:`armlab.models._fk_kernel`) from numba's cache (compiled there on a first use);
+    a protocol declares it as its ``preload``."""
+    _kernel.load()
+    RobotKinematics.load_compiled()
 
 
 def stop_postures(scene: HandScene, stops: np.ndarray) -> np.ndarray:

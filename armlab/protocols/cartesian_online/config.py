@@ -1,9 +1,9 @@
 """The typed experiment of ``cartesian_online`` (paper 002, thesis Ch. 3): the groups it reads.
 
-``simulation`` says how the five experiments are generated (level A: the thesis's own algebraic
-generator, the default until level B's estimates are validated against the field's truth; level
-B: the LWR and a hand with inertia in MuJoCo; level C is not built yet and is refused with the
-valid choices),
+``simulation`` says how the five experiments are generated (level B, the default: the LWR and a
+hand with inertia in MuJoCo, its estimates tested against the field's truth in
+tests/test_cartesian_level_b.py; level A: the thesis's own algebraic generator; level C is not
+built yet and is refused with the valid choices),
 ``identification`` how they are identified and scored (the group ``armlab estimate`` takes).
 Defaults are the thesis's (Tables 3.1-3.3, §3.1-3.5) or, where it is silent, spec 002's and
 docs/cartesian_online.md's documented choices.
@@ -54,9 +54,9 @@ else:  # OmegaConf 2.3 rejects Literal field types: it reads these as str, __pos
 class SimulationConfig:
     """How the thesis's five experiments are generated (thesis Ch. 3; spec 002)."""
 
-    # A (default): the thesis's q_h = q_r + q_p, F = D(q_h) q̇_h + K(q_h) q_p (thesis Ch. 3);
-    # B: the LWR + hand in MuJoCo (armlab.sim.cartesian_level_b)
-    level: Level = "A"
+    # B (default): the LWR + hand in MuJoCo (armlab.sim.cartesian_level_b), level A on the same paths
+    # beside it; A: the thesis's q_h = q_r + q_p, F = D(q_h) q̇_h + K(q_h) q_p (thesis Ch. 3)
+    level: Level = "B"
     # dimensionless factor on every stiffness coefficient of Table 3.1 (spec 002: its values are
     # 10-100x physiological hand stiffness; 1 is the thesis)
     stiffness_scale: float = 1.0

@@ -189,7 +189,7 @@ def simulate_cartesian(cfg: CartesianOnlineConfig) -> CartesianRecording:
         attrs={
             "protocol": cfg.protocol_name,
             "seed": cfg.seed,
-            "level": s.level,
+            "level": "A",  # this generator's trials; level B replaces them (level_b.py)
             "corner_s": s.corner_s,
             "truth_json": json.dumps(truth),
         },

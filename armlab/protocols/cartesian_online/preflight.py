@@ -11,7 +11,7 @@ from __future__ import annotations
 from armlab.config.schema import SimConfig
 from armlab.errors import ConfigError
 from armlab.perturbations.ramp_waveforms import MIN_SAMPLES_PER_SEGMENT, TRAPEZOIDAL, TRIANGULAR
-from armlab.protocols.cartesian_online.config import CartesianOnlineConfig
+from armlab.protocols.cartesian_online.config import CartesianOnlineConfig, SimulationConfig
 
 __all__ = ["validate"]
 
@@ -40,6 +40,11 @@ def validate(cfg: CartesianOnlineConfig) -> None:
             raise ConfigError(
                 "sim.* is not read at simulation.level=A (the thesis's algebraic generator has no physics "
                 "step); valid: leave sim at its defaults"
+            )
+        if s.hand_mass_kg != SimulationConfig().hand_mass_kg:
+            raise ConfigError(
+                "simulation.hand_mass_kg is not read at simulation.level=A (the thesis's model has no "
+                "inertia); valid: simulation=level_b"
             )
     # the rule of RampWaveform.sample; the trapezoid's 50 ms ramp is the shortest segment (§3.1.1)
     need = max(w.min_fs_hz for w in (TRIANGULAR, TRAPEZOIDAL))
