@@ -16,75 +16,21 @@ bit (tests/test_cartesian_level_b.py steps the same trials by a per-step Python 
 
 from __future__ import annotations
 
-import ctypes
-from functools import cache
-from pathlib import Path
-
-import mujoco
 import numpy as np
-from llvmlite import ir
-from numba import carray, njit, types
-from numba.extending import intrinsic
+from numba import carray, njit
 
-from armlab.errors import SimulationError
+from armlab.sim._mujoco_calls import call, f64_pointer
 
 __all__ = [
     "NEGATIVE_STIFFNESS",
     "NON_FINITE",
     "load",
-    "mj_step_address",
     "step_trials",
 ]
 
 #: status codes of :func:`step_trials` per trial (0: stepped to the end)
 NEGATIVE_STIFFNESS = 1
 NON_FINITE = 2
-
-
-@cache
-def mj_step_address() -> int:
-    """Address of ``mj_step`` in the MuJoCo library the bindings load.
-
-    The Python package ships its shared library beside its modules (``libmujoco.so.<version>``
-    on Linux, ``libmujoco.<version>.dylib`` on macOS, ``mujoco.dll`` on Windows); loading it again
-    returns the process's one copy, so ``MjModel._address`` / ``MjData._address`` point into it.
-
-    Raises:
-        SimulationError: the library is not found beside the ``mujoco`` package.
-    """
-    folder = Path(mujoco.__file__).parent
-    found = sorted(folder.glob("libmujoco.so*")) + sorted(folder.glob("libmujoco*.dylib"))
-    found += sorted(folder.glob("mujoco.dll"))
-    if not found:
-        raise SimulationError(f"MuJoCo's shared library was not found in {folder}")
-    lib = ctypes.CDLL(str(found[0]))
-    return int(ctypes.cast(lib.mj_step, ctypes.c_void_p).value)
-
-
-@intrinsic
-def _f64(typingctx, address):
-    """An ``int64`` address as a ``double*``."""
-    sig = types.CPointer(types.float64)(address)
-
-    def codegen(context, builder, signature, args):
-        return builder.inttoptr(args[0], context.get_value_type(types.CPointer(types.float64)))
-
-    return sig, codegen
-
-
-@intrinsic
-def _call(typingctx, function, model, data):
-    """Call ``void f(const mjModel*, mjData*)`` at address ``function``."""
-    sig = types.void(function, model, data)
-
-    def codegen(context, builder, signature, args):
-        ptr = ir.IntType(8).as_pointer()
-        fnty = ir.FunctionType(ir.VoidType(), [ptr, ptr])
-        fn = builder.inttoptr(args[0], fnty.as_pointer())
-        builder.call(fn, [builder.inttoptr(args[1], ptr), builder.inttoptr(args[2], ptr)])
-        return context.get_dummy_value()
-
-    return sig, codegen
 
 
 @njit(nogil=True, cache=True)
@@ -158,10 +104,10 @@ def step_trials(
     n_s = targets.shape[1]
     n_robot = robot_qpos.size
     for i in rows:
-        qpos = carray(_f64(addr[i, 0]), (idx[6],))
-        qvel = carray(_f64(addr[i, 1]), (idx[7],))
-        ctrl = carray(_f64(addr[i, 2]), (idx[8],))
-        sd = carray(_f64(addr[i, 3]), (idx[9],))
+        qpos = carray(f64_pointer(addr[i, 0]), (idx[6],))
+        qvel = carray(f64_pointer(addr[i, 1]), (idx[7],))
+        ctrl = carray(f64_pointer(addr[i, 2]), (idx[8],))
+        sd = carray(f64_pointer(addr[i, 3]), (idx[9],))
         status[i] = 0
         for step in range(n_settle + n_s * substeps):
             x, y = qpos[idx[0]], qpos[idx[1]]
@@ -194,7 +140,7 @@ def step_trials(
                     out_q[i, sample, a] = qpos[robot_qpos[a]]
                 out_field[i, sample, 0] = fx
                 out_field[i, sample, 1] = fy
-            _call(step_fn, model, data[i])
+            call(step_fn, model, data[i])
             if sample >= 0:
                 for c in range(sensor_cols.size):
                     out_sensor[i, sample, c] = sd[sensor_cols[c]]

@@ -38,6 +38,7 @@ from armlab.models.cartesian_field import QuadraticImpedanceField
 from armlab.models.cartesian_hand_scene import HAND_HEIGHT_M, HandScene
 from armlab.models.robot_fk import RobotKinematics
 from armlab.sim import _level_b_kernel as _kernel
+from armlab.sim._mujoco_calls import mujoco_function_address
 from armlab.sim.robot_ik import nominal_robot_posture, solve_ik
 from armlab.sim.stability import warning_counts
 
@@ -197,7 +198,7 @@ def simulate_level_b(
     robot_q, sensor, human = np.empty((n, n_s, 7)), np.empty((n, n_s, cols.size)), np.empty((n, n_s, 2))
     status = np.zeros(n, dtype=np.int64)
     args = (
-        _kernel.mj_step_address(),
+        mujoco_function_address("mj_step"),
         model._address,
         np.array([d._address for d in datas], dtype=np.int64),
         addr,

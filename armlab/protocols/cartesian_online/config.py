@@ -2,8 +2,9 @@
 
 ``simulation`` says how the five experiments are generated (level B, the default: the LWR and a
 hand with inertia in MuJoCo, its estimates tested against the field's truth in
-tests/test_cartesian_level_b.py; level A: the thesis's own algebraic generator; level C is not
-built yet and is refused with the valid choices),
+tests/test_cartesian_level_b.py; level A: the thesis's own algebraic generator; level C: the
+conditioning lab's planar Hill arm as the truth, where the diagonal quadratic and the polar model
+are compared by held-out force VAF),
 ``identification`` how they are identified and scored (the group ``armlab estimate`` takes).
 Defaults are the thesis's (Tables 3.1-3.3, §3.1-3.5) or, where it is silent, spec 002's and
 docs/cartesian_online.md's documented choices.
@@ -29,8 +30,9 @@ __all__ = [
 
 #: How the experiments are generated: (A) the thesis's algebraic generator; (B) the LWR pushing a
 #: hand with inertia through its cuff in MuJoCo, the field as the human's force, measured through
-#: the JR3 F/T and LWR encoder models (level C, the Hill arm as truth, comes with a later slice).
-SimulationLevel = Literal["A", "B"]
+#: the JR3 F/T and LWR encoder models; (C) the planar Hill arm as the truth (its full,
+#: posture-dependent Cartesian impedance) on a circle within its reach.
+SimulationLevel = Literal["A", "B", "C"]
 #: Exp. 4 estimators: the thesis's Eq. 3.4.1 (constant damping columns) and the model's own D = δ√K.
 Exp4Method = Literal["linear", "sqrt_damping"]
 IDENTIFICATION_CHOICES: tuple[str, ...] = get_args(Exp4Method)
@@ -55,7 +57,8 @@ class SimulationConfig:
     """How the thesis's five experiments are generated (thesis Ch. 3; spec 002)."""
 
     # B (default): the LWR + hand in MuJoCo (armlab.sim.cartesian_level_b), level A on the same paths
-    # beside it; A: the thesis's q_h = q_r + q_p, F = D(q_h) q̇_h + K(q_h) q_p (thesis Ch. 3)
+    # beside it; A: the thesis's q_h = q_r + q_p, F = D(q_h) q̇_h + K(q_h) q_p (thesis Ch. 3);
+    # C: the planar Hill arm's force on the handle (armlab.sim.cartesian_level_c)
     level: Level = "B"
     # dimensionless factor on every stiffness coefficient of Table 3.1 (spec 002: its values are
     # 10-100x physiological hand stiffness; 1 is the thesis)

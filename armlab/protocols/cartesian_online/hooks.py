@@ -18,6 +18,11 @@ from armlab.protocols.cartesian_online.level_b import (
     inertia_compensated_trials,
     simulate_level_b_trials,
 )
+from armlab.protocols.cartesian_online.level_c import (
+    estimate_level_c,
+    format_level_c_table,
+    simulate_level_c_trials,
+)
 from armlab.protocols.cartesian_online.results import estimate_cartesian, estimate_headlines
 
 __all__ = [
@@ -160,8 +165,11 @@ def level_comparison(results: dict[str, dict], summary: dict) -> dict:
 
 
 def simulate(cfg: CartesianOnlineConfig) -> Simulated:
-    """Generate the five experiments (level A, and at level B the LWR's on the same paths);
-    estimation runs when the runner asks for it."""
+    """Generate the five experiments (level A, and at level B the LWR's on the same paths), or
+    level C's Hill-arm circle; estimation runs when the runner asks for it."""
+    if cfg.simulation.level == "C":
+        trials_c, scene_c = simulate_level_c_trials(cfg)
+        return Simulated(trials_c, scene_c, {}, lambda: estimate_level_c(trials_c, cfg.identification))
     rec = simulate_cartesian(cfg)
     if cfg.simulation.level == "A":
 
@@ -196,6 +204,8 @@ def reestimate(trials: TrialSet, stored, overrides: list[str]) -> dict:
     ident = apply_overrides(
         stored_group(IdentificationConfig, stored, "identification"), "identification", overrides
     )
+    if str(trials.attrs.get("level", "A")) == "C":
+        return estimate_level_c(trials, ident)[0]
     results, _ = estimate_cartesian(trials, ident)
     return results
 
@@ -204,6 +214,8 @@ def outputs(ctx: OutputContext) -> dict:
     """The checks beside the thesis (table.txt), the figures and the recording."""
     viz, out_dir, cfg = ctx.viz, ctx.out_dir, ctx.cfg
     written = {"table": write_new(out_dir / "table.txt", format_table(ctx.results, viz) + "\n")}
+    if ctx.results.get("level") == "C":  # the comparison is the table; the figures are Exps. 1-5's
+        return written
     if cfg.output.figures:
         written.update(viz.plot_cartesian_figures(ctx.series, ctx.results, out_dir))
     if cfg.output.recording:
@@ -214,5 +226,7 @@ def outputs(ctx: OutputContext) -> dict:
 
 
 def format_table(results: dict, viz) -> str:
-    """Spec 002's checks beside the thesis's claims."""
+    """Spec 002's checks beside the thesis's claims (level C: its model comparison)."""
+    if results.get("level") == "C":
+        return format_level_c_table(results)
     return viz.format_cartesian_table(results)
