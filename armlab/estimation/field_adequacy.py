@@ -16,7 +16,8 @@ judged by the variance of the force they account for on held-out sequences:
   (:func:`~armlab.estimation.cartesian_regressors.full_quadratic_regressor`, 14 per axis): it
   tells whether a diagonal model's deficit is the missing coupling or the quadratic form.
 
-VAF (variance accounted for) ``= 100·(1 − var(F − F̂)/var(F))`` per axis, %.
+VAF (variance accounted for) ``= 100·(1 − var(F − F̂)/var(F))`` per axis, %
+(:func:`~armlab.estimation.virtual_force.vaf`).
 """
 
 from __future__ import annotations
@@ -29,6 +30,7 @@ from armlab.errors import DataError
 from armlab.estimation.cartesian_regressors import full_quadratic_regressor, quadratic_field_regressor
 from armlab.estimation.online_ls import ls_fit
 from armlab.estimation.polar import polar_signals, to_polar
+from armlab.estimation.virtual_force import vaf
 
 __all__ = [
     "ADEQUACY_MODELS",
@@ -36,7 +38,6 @@ __all__ = [
     "ModelFit",
     "fit_field_models",
     "polar_field_regressor",
-    "vaf_pct",
 ]
 
 #: the models compared (module docstring)
@@ -44,12 +45,6 @@ ADEQUACY_MODELS = ("diagonal_quadratic", "polar", "full_quadratic")
 #: §3.5.2's orders of the polar model's entries in (ρ, θ): rows (F_ρ, M), columns (ρ_p, θ_p) for
 #: K and (ρ̇, θ̇) for D; "at least second order in θ" for the anti-diagonal is taken as 2
 POLAR_ORDERS = {"11": (1, 1), "12": (1, 2), "21": (1, 2), "22": (1, 1)}
-
-
-def vaf_pct(measured: np.ndarray, predicted: np.ndarray) -> np.ndarray:
-    """Variance accounted for per column, %: ``100·(1 − var(y − ŷ)/var(y))`` over axis 0."""
-    y, y_hat = np.asarray(measured, float), np.asarray(predicted, float)
-    return 100.0 * (1.0 - np.var(y - y_hat, axis=0) / np.var(y, axis=0))
 
 
 def _monomials(u: np.ndarray, v: np.ndarray, order: tuple[int, int]) -> np.ndarray:
@@ -156,8 +151,8 @@ def fit_field_models(
         out[model] = ModelFit(
             model=model,
             n_parameters=sum(len(f.theta) for f in fits),
-            vaf_train_pct=vaf_pct(force[train], pred[train]),
-            vaf_held_out_pct=vaf_pct(force[test], pred[test]),
+            vaf_train_pct=vaf(force[train], pred[train]),
+            vaf_held_out_pct=vaf(force[test], pred[test]),
             predicted=pred[test],
             theta=(fits[0].theta, fits[1].theta),
         )
