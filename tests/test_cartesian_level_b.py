@@ -21,6 +21,7 @@ from armlab.protocols.cartesian_online.level_b import (
     inertia_compensated_trials,
     simulate_level_b_trials,
 )
+from armlab.sim import cartesian_level_b
 from armlab.sim.cartesian_level_b import SETTLE_S, _jacobians, simulate_level_b, stop_postures
 from armlab.sim.stability import warning_counts
 
@@ -82,9 +83,11 @@ def _exp4_field_pct(trials, method: str = "sqrt_damping") -> float:
     return float(identify_exp4(records_from_trials(trials)["exp4"], method=method).field.max_pct[-1])
 
 
-def test_compiled_stepping_equals_a_per_step_python_reference():
+def test_compiled_stepping_equals_a_per_step_python_reference(monkeypatch):
     """The kernel's field and stepping against a plain loop: numpy's field (Eq. 2.2.1), one mj_step
-    per call, each trial on its own MjData (the same warm starts) -> bit-identical."""
+    per call, each trial on a fresh MjData -> bit-identical. A pool of 2 MjData makes the third
+    trial reuse a reset one, which must not change it."""
+    monkeypatch.setattr(cartesian_level_b, "DATA_POOL", 2)
     scene = build_hand_scene(SimConfig())
     model = scene.model
     stops = np.array([[0.95, 0.0], [1.05, 0.1]])

@@ -12,11 +12,11 @@ with its equilibrium at the stopped reference ``q_r``:
 no MuJoCo actuator can express (gains and biases are affine in one transmission's length and
 velocity; a field linearised per chunk of steps is not exact). It is therefore the control of two
 motors on the hand's slides, recomputed from every trial's state before **every physics step**.
-That loop runs compiled (:mod:`armlab.sim._level_b_kernel`): one ``MjData`` per trial, the field
-from its ``qpos``/``qvel`` written to its ``ctrl``, then MuJoCo's ``mj_step``, the trials shared
-among threads. This is the discretisation MuJoCo uses for its own explicit actuator forces
-(evaluated from the state at the start of the step), so nothing is linearised or held over a
-chunk: the only error is the integrator's.
+That loop runs compiled (:mod:`armlab.sim._level_b_kernel`): each trial in its own ``MjData`` (reset
+from a pool of :data:`DATA_POOL`), the field from its ``qpos``/``qvel`` written to its ``ctrl``,
+then MuJoCo's ``mj_step``, the trials shared among threads. This is the discretisation MuJoCo uses
+for its own explicit actuator forces (evaluated from the state at the start of the step), so
+nothing is linearised or held over a chunk: the only error is the integrator's.
 
 The thesis logs only during perturbations (§3.2.2) and each perturbation starts with the path
 stopped, so every perturbation is simulated as one trial starting at rest in equilibrium at its
@@ -43,6 +43,7 @@ from armlab.sim.robot_ik import nominal_robot_posture, solve_ik
 from armlab.sim.stability import warning_counts
 
 __all__ = [
+    "DATA_POOL",
     "SETTLE_S",
     "LevelBTrials",
     "load_level_b_compiled",
@@ -50,6 +51,8 @@ __all__ = [
     "stop_postures",
 ]
 
+#: MjData reused for the trials (each trial is reset into one; a MjData holds ~0.46 MB, measured)
+DATA_POOL = 64
 #: s, settle at the stop before each perturbation: the cuff's 0.04 kg (not gravity compensated)
 #: sags the servos by ~1e-5 m and the connect constraint takes up its 1 ms time constant
 #: (assumption: 100 time constants; the field holds the hand in place meanwhile)
@@ -77,6 +80,24 @@ class LevelBTrials:
     hand_acc: np.ndarray
     human_force: np.ndarray
     fs_hz: float
+
+
+def _check(status: np.ndarray, rows: np.ndarray, ref: np.ndarray, warned: dict) -> None:
+    """Raise on the stepped ``rows``' failures: a negative stiffness (the field's), a non-finite
+    state or a MuJoCo warning (accumulated in each trial's ``MjData``, nothing clears them)."""
+    bad = rows[status[rows] != 0]
+    negative = bad[status[bad] == _kernel.NEGATIVE_STIFFNESS]
+    if negative.size:
+        i = negative[0]
+        raise ConfigError(
+            f"the stiffness field is negative on level-B trial {i} (stop {ref[i]} m): D = δ√K is undefined "
+            "there; lower the perturbation or change the field"
+        )
+    if warned or bad.size:
+        raise SimulationError(
+            f"level-B simulation diverged or MuJoCo warned ({warned or 'non-finite state'}, trials "
+            f"{bad.tolist() or rows[[0, -1]].tolist()}); lower sim.timestep_s or simulation.stiffness_scale"
+        )
 
 
 def load_level_b_compiled() -> None:
@@ -150,6 +171,7 @@ def simulate_level_b(
 
     Raises:
         SimulationError: a trial diverged or MuJoCo warned.
+        ConfigError: the field's stiffness turned negative on a trial (D = δ√K undefined).
     """
     model = scene.model
     dt = model.opt.timestep
@@ -165,19 +187,6 @@ def simulate_level_b(
     # measured, so the small second-order error only changes the executed excursion)
     targets = q0[:, None, :] + np.einsum("nij,nsj->nsi", jac, displacement)
 
-    datas = [mujoco.MjData(model) for _ in range(n)]
-    for i, data in enumerate(datas):  # rest in equilibrium at the stop (n mj_forward calls, ~1 ms in all)
-        data.qpos[scene.robot_qpos] = q0[i]
-        data.qpos[scene.hand_qpos[:2]] = ref[i]
-        data.ctrl[scene.robot_act] = q0[i]
-        mujoco.mj_forward(model, data)
-    addr = np.array(
-        [
-            [d.qpos.ctypes.data, d.qvel.ctypes.data, d.ctrl.ctypes.data, d.sensordata.ctypes.data]
-            for d in datas
-        ],
-        dtype=np.int64,
-    ).reshape(n, 4)
     ft, acc = scene.sensors["ft_force"], scene.sensors["hand_acc"]
     cols = np.r_[np.arange(ft.start, ft.stop), np.arange(acc.start, acc.stop)].astype(np.int64)
     idx = np.array(
@@ -197,12 +206,6 @@ def simulate_level_b(
     hand_pos, hand_vel = np.empty((n, n_s, 2)), np.empty((n, n_s, 2))
     robot_q, sensor, human = np.empty((n, n_s, 7)), np.empty((n, n_s, cols.size)), np.empty((n, n_s, 2))
     status = np.zeros(n, dtype=np.int64)
-    args = (
-        mujoco_function_address("mj_step"),
-        model._address,
-        np.array([d._address for d in datas], dtype=np.int64),
-        addr,
-    )
     rest = (
         idx,
         cols,
@@ -224,26 +227,29 @@ def simulate_level_b(
         human,
         status,
     )
-    parts = np.array_split(np.arange(n, dtype=np.int64), max(1, min(n, nthread or os.cpu_count() or 1)))
-    if len(parts) == 1:
-        _kernel.step_trials(*args, parts[0], *rest)
-    else:  # the kernel releases the GIL: one contiguous share of the trials per thread
-        with ThreadPoolExecutor(len(parts)) as pool:
-            list(pool.map(lambda rows: _kernel.step_trials(*args, rows, *rest), parts))
-    bad = np.flatnonzero(status)
-    if bad.size and np.any(status == _kernel.NEGATIVE_STIFFNESS):
-        i = bad[status[bad] == _kernel.NEGATIVE_STIFFNESS][0]
-        raise ConfigError(
-            f"the stiffness field is negative on level-B trial {i} (stop {ref[i]} m): D = δ√K is undefined "
-            "there; lower the perturbation or change the field"
-        )
-    # MuJoCo's warnings accumulate in each trial's own MjData (nothing clears them in between)
-    warned = warning_counts(datas)
-    if warned or bad.size:
-        raise SimulationError(
-            f"level-B simulation diverged or MuJoCo warned ({warned or 'non-finite state'}, trials "
-            f"{bad.tolist() or 'see warnings'}); lower sim.timestep_s or simulation.stiffness_scale"
-        )
+    step_fn = mujoco_function_address("mj_step")
+    n_threads = max(1, min(n, nthread or os.cpu_count() or 1))
+    pool = [mujoco.MjData(model) for _ in range(min(n, DATA_POOL))]
+    data_addr, addr = np.zeros(n, dtype=np.int64), np.zeros((n, 4), dtype=np.int64)
+    with ThreadPoolExecutor(n_threads) as threads:
+        for first in range(0, n, len(pool)):
+            rows = np.arange(first, min(n, first + len(pool)), dtype=np.int64)
+            for i, data in zip(rows, pool, strict=False):  # rest in equilibrium at the stop
+                mujoco.mj_resetData(model, data)
+                data.qpos[scene.robot_qpos] = q0[i]
+                data.qpos[scene.hand_qpos[:2]] = ref[i]
+                data.ctrl[scene.robot_act] = q0[i]
+                mujoco.mj_forward(model, data)
+                data_addr[i] = data._address
+                addr[i] = [a.ctypes.data for a in (data.qpos, data.qvel, data.ctrl, data.sensordata)]
+            # the kernel releases the GIL: one contiguous share of the rows per thread
+            shares = np.array_split(rows, n_threads)
+            list(
+                threads.map(
+                    lambda r: _kernel.step_trials(step_fn, model._address, data_addr, addr, r, *rest), shares
+                )
+            )
+            _check(status, rows, ref, warning_counts(pool[: len(rows)]))
     return LevelBTrials(
         hand_pos=hand_pos,
         hand_vel=hand_vel,
