@@ -30,6 +30,7 @@ from armlab.protocols.cartesian_online.config import (
 )
 from armlab.protocols.cartesian_online.experiment import records_from_trials, simulate_cartesian
 from armlab.protocols.cartesian_online.results import estimate_cartesian
+from armlab.protocols.compose import compose
 from armlab.sim import simulate_level_a
 
 
@@ -124,14 +125,24 @@ def test_estimate_reruns_on_the_trial_file_with_overrides(cli_run, tmp_path, cap
 @pytest.mark.parametrize(
     ("args", "message"),
     [
-        (["simulation.level=C"], "simulation.level='C' is not valid; choose one of ['A', 'B']"),
+        (["simulation.level=D"], "simulation.level='D' is not valid; choose one of ['A', 'B', 'C']"),
         (["simulation.stiffness_scale=-1"], "simulation.stiffness_scale must be a positive factor"),
         (["simulation.force_noise_std_N=-0.1"], "simulation.force_noise_std_N must be >= 0 N"),
         (["identification.exp4_methods=[cubic]"], "choose one of ['linear', 'sqrt_damping']"),
         (["simulation=level_a", "sensors=realistic"], "level A's sensors are the thesis's ideal ones"),
         (["simulation=level_a", "sim.timestep_s=0.001"], "sim.* is not read at simulation.level=A"),
-        (["simulation=level_b", "sensors=realistic"], "level B always records through its own JR3"),
+        (
+            ["simulation=level_a", "simulation.hand_mass_kg=0.1"],
+            "hand_mass_kg is not read at simulation.level=A",
+        ),
+        (["sensors=realistic"], "level B always records through its own JR3"),  # the default level
+        (["simulation.hand_mass_kg=0.001"], "simulation.hand_mass_kg must be >= 0.01 kg"),
         (["simulation=level_b", "sim.settle_s=0.5"], "sim.settle_s is not read at simulation.level=B"),
+        (
+            ["simulation=level_c", "simulation.stiffness_scale=2"],
+            "stiffness_scale is not read at simulation.level=C",
+        ),
+        (["simulation=level_c", "sensors=realistic"], "not read at simulation.level=C"),
         (["effects=[force_sensor_noise]"], "switch them with simulation.force_noise_std_N"),
     ],
 )
@@ -142,9 +153,14 @@ def test_bad_config_values_are_refused_on_one_line(args, message, tmp_path, caps
     assert not (tmp_path / "r" / "results.json").exists()
 
 
+def test_level_b_is_the_default_and_level_a_selectable():
+    assert compose(["protocol=cartesian_online"])[1].simulation.level == "B"
+    assert compose(["protocol=cartesian_online", "simulation=level_a"])[1].simulation.level == "A"
+
+
 def test_config_refusals_name_the_valid_choices():
-    with pytest.raises(ConfigError, match=r"choose one of \['A', 'B'\]"):
-        SimulationConfig(level="C")
+    with pytest.raises(ConfigError, match=r"choose one of \['A', 'B', 'C'\]"):
+        SimulationConfig(level="D")
     with pytest.raises(ConfigError, match="n_stops must be an integer in \\[3, 200\\]"):
         SimulationConfig(n_stops=1)
     with pytest.raises(ConfigError, match="r2_adj_threshold must lie in \\(0, 1\\)"):

@@ -32,6 +32,13 @@ from armlab.estimation.criteria import (
     relative_error,
     symmetric_part,
 )
+from armlab.estimation.field_adequacy import (
+    ADEQUACY_MODELS,
+    POLAR_ORDERS,
+    ModelFit,
+    fit_field_models,
+    polar_field_regressor,
+)
 from armlab.estimation.field_scoring import (
     FieldError,
     disc_grid,
@@ -267,6 +274,11 @@ __all__ = [
     "quadratic_field_regressor",
     "quadratic_x_regressor",
     "FieldError",
+    "ADEQUACY_MODELS",
+    "POLAR_ORDERS",
+    "ModelFit",
+    "fit_field_models",
+    "polar_field_regressor",
     "disc_grid",
     "field_error",
     "relative_error_pct",

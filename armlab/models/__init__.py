@@ -59,6 +59,12 @@ from armlab.models.ground_truth import (
     impedance_fd,
     joint_impedance,
 )
+from armlab.models.hill_arm_field import (
+    LEVEL_C_CIRCLE_CENTRE_M,
+    LEVEL_C_CIRCLE_RADIUS_M,
+    HillArm,
+    build_hill_arm,
+)
 from armlab.models.joint_rig_scene import (
     PAYLOAD_OWN_INERTIA_KGM2,
     Joint1DofScene,
@@ -160,6 +166,10 @@ __all__ = [
     "joint_impedance",
     "model_file",
     "EndpointTruth",
+    "LEVEL_C_CIRCLE_CENTRE_M",
+    "LEVEL_C_CIRCLE_RADIUS_M",
+    "HillArm",
+    "build_hill_arm",
     "endpoint_truth",
     "relaxed_activation",
     "LOADS",

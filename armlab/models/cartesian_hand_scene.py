@@ -56,6 +56,9 @@ class HandScene:
         sensors: sensor name -> slice into ``sensordata`` (``ft_force``: the flange's force on the
             cuff and hand, N, in the F/T site frame).
         cuff_dof: empty (rigid cuff); kept so the robot kinematics can read this scene.
+        ft_load_mass_kg: kg, the mass beyond the F/T sensor's site that moves with the hand (the
+            sensor's tool-side half, the cuff's mount and the hand): its inertial force is in the
+            F/T reading.
     """
 
     model: mujoco.MjModel
@@ -71,16 +74,20 @@ class HandScene:
     hand_site: int
     sensors: dict[str, slice]
     cuff_dof: np.ndarray
+    ft_load_mass_kg: float
 
 
-def build_hand_scene(sim: SimConfig) -> HandScene:
+def build_hand_scene(sim: SimConfig, hand_mass_kg: float | None = None) -> HandScene:
     """Compose, compile and index the level-B scene (module docstring).
 
     Args:
         sim: physics settings (``timestep_s``, ``integrator``).
+        hand_mass_kg: kg, the hand's mass in place of models/cartesian_hand's 0.966 kg (its
+            rotational inertia scaled alike); None keeps the file's.
 
     Raises:
-        ModelError: a model file or an expected element is missing.
+        ModelError: a model file or an expected element is missing, or ``hand_mass_kg`` is not a
+            positive number.
     """
     root = mjcf.RootElement(model="cartesian_hand_scene")
     root.compiler.angle = "radian"
@@ -95,6 +102,12 @@ def build_hand_scene(sim: SimConfig) -> HandScene:
         joint.remove()  # rigid: the thesis's subject holds the robot's handle
     flange.attach(cuff)
     hand = mjcf.from_path(str(model_file("cartesian_hand", "hand.xml")))
+    if hand_mass_kg is not None:
+        if not (np.isfinite(hand_mass_kg) and hand_mass_kg > 0):
+            raise ModelError(f"hand_mass_kg must be a positive number of kg, got {hand_mass_kg!r}")
+        inertial = hand.find("body", "hand").inertial
+        inertial.diaginertia = np.asarray(inertial.diaginertia) * (hand_mass_kg / inertial.mass)
+        inertial.mass = hand_mass_kg
     root.worldbody.add("site", name="thesis_origin", pos=[0.0, 0.0, HAND_HEIGHT_M]).attach(hand)
     tc = 2.0 * sim.timestep_s  # the stiffest time constant MuJoCo allows, as the lab's cuff
     root.equality.add(
@@ -129,4 +142,8 @@ def build_hand_scene(sim: SimConfig) -> HandScene:
         hand_site=named_id(model, mujoco.mjtObj.mjOBJ_SITE, "hand/hand"),
         sensors=sensors,
         cuff_dof=np.zeros(0, dtype=int),
+        ft_load_mass_kg=float(
+            model.body_subtreemass[named_id(model, mujoco.mjtObj.mjOBJ_BODY, "lwr/cuff/ft_sensor")]
+            + model.body_mass[model.site_bodyid[named_id(model, mujoco.mjtObj.mjOBJ_SITE, "hand/hand")]]
+        ),
     )

@@ -40,8 +40,14 @@ from armlab.sim.cartesian_level_a import (
 from armlab.sim.cartesian_level_b import (
     SETTLE_S,
     LevelBTrials,
+    load_level_b_compiled,
     simulate_level_b,
     stop_postures,
+)
+from armlab.sim.cartesian_level_c import (
+    LevelCRecord,
+    hill_arm_force,
+    simulate_level_c,
 )
 from armlab.sim.force_control import ForceTrial, simulate_force_trial
 from armlab.sim.hold import (
@@ -87,8 +93,12 @@ __all__ = [
     "CartesianRecord",
     "SETTLE_S",
     "LevelBTrials",
+    "load_level_b_compiled",
     "simulate_level_b",
     "stop_postures",
+    "LevelCRecord",
+    "hill_arm_force",
+    "simulate_level_c",
     "simulate_level_a",
     "A_MIN",
     "PRELOAD_CONDITIONS",

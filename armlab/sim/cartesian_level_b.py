@@ -10,11 +10,11 @@ with its equilibrium at the stopped reference ``q_r``:
 
 **How the field is applied exactly.** ``F_human`` depends nonlinearly on the hand's state, which
 no MuJoCo actuator can express (gains and biases are affine in one transmission's length and
-velocity). It is therefore the control of two motors on the hand's slides, recomputed from every
-trial's state before **every physics step**: all trials advance together by one step per
-``mujoco.rollout`` call (one call per step for the whole batch, not per trial), and between calls
-the field is evaluated for the whole batch at once from the hand's ``qpos``/``qvel``, which are
-entries of the state vector (no kinematics needed). This is the same discretisation MuJoCo uses
+velocity; a field linearised per chunk of steps is not exact). It is therefore the control of two
+motors on the hand's slides, recomputed from every trial's state before **every physics step**.
+That loop runs compiled (:mod:`armlab.sim._level_b_kernel`): each trial in its own ``MjData`` (reset
+from a pool of :data:`DATA_POOL`), the field from its ``qpos``/``qvel`` written to its ``ctrl``,
+then MuJoCo's ``mj_step``, the trials shared among threads. This is the discretisation MuJoCo uses
 for its own explicit actuator forces (evaluated from the state at the start of the step), so
 nothing is linearised or held over a chunk: the only error is the integrator's.
 
@@ -27,25 +27,32 @@ short settle (:data:`SETTLE_S`) before the perturbation begins.
 from __future__ import annotations
 
 import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import mujoco
 import numpy as np
-from mujoco import rollout as mj_rollout
 
-from armlab.errors import SimulationError
+from armlab.errors import ConfigError, SimulationError
 from armlab.models.cartesian_field import QuadraticImpedanceField
 from armlab.models.cartesian_hand_scene import HAND_HEIGHT_M, HandScene
+from armlab.models.robot_fk import RobotKinematics
+from armlab.sim import _level_b_kernel as _kernel
+from armlab.sim._mujoco_calls import mujoco_function_address
 from armlab.sim.robot_ik import nominal_robot_posture, solve_ik
 from armlab.sim.stability import warning_counts
 
 __all__ = [
+    "DATA_POOL",
     "SETTLE_S",
     "LevelBTrials",
+    "load_level_b_compiled",
     "simulate_level_b",
     "stop_postures",
 ]
 
+#: MjData reused for the trials (each trial is reset into one; a MjData holds ~0.46 MB, measured)
+DATA_POOL = 64
 #: s, settle at the stop before each perturbation: the cuff's 0.04 kg (not gravity compensated)
 #: sags the servos by ~1e-5 m and the connect constraint takes up its 1 ms time constant
 #: (assumption: 100 time constants; the field holds the hand in place meanwhile)
@@ -60,6 +67,8 @@ class LevelBTrials:
         hand_pos: (n, s, 2) m, hand position (thesis frame); hand_vel: (n, s, 2) m/s.
         robot_q: (n, s, 7) rad, robot joint angles (what the encoders measure).
         ft_force: (n, s, 3) N, the flange's force on the cuff and hand in the F/T site frame.
+        hand_acc: (n, s, 2) m/s², the hand's acceleration along x, y (its accelerometer; the
+            site is world-aligned, so gravity is only in z).
         human_force: (n, s, 2) N, the field's force on the hand (``F_human`` above).
         fs_hz: Hz.
     """
@@ -68,8 +77,35 @@ class LevelBTrials:
     hand_vel: np.ndarray
     robot_q: np.ndarray
     ft_force: np.ndarray
+    hand_acc: np.ndarray
     human_force: np.ndarray
     fs_hz: float
+
+
+def _check(status: np.ndarray, rows: np.ndarray, ref: np.ndarray, warned: dict) -> None:
+    """Raise on the stepped ``rows``' failures: a negative stiffness (the field's), a non-finite
+    state or a MuJoCo warning (accumulated in each trial's ``MjData``, nothing clears them)."""
+    bad = rows[status[rows] != 0]
+    negative = bad[status[bad] == _kernel.NEGATIVE_STIFFNESS]
+    if negative.size:
+        i = negative[0]
+        raise ConfigError(
+            f"the stiffness field is negative on level-B trial {i} (stop {ref[i]} m): D = δ√K is undefined "
+            "there; lower the perturbation or change the field"
+        )
+    if warned or bad.size:
+        raise SimulationError(
+            f"level-B simulation diverged or MuJoCo warned ({warned or 'non-finite state'}, trials "
+            f"{bad.tolist() or rows[[0, -1]].tolist()}); lower sim.timestep_s or simulation.stiffness_scale"
+        )
+
+
+def load_level_b_compiled() -> None:
+    """Load the compiled stepping (:mod:`armlab.sim._level_b_kernel`) and the robot's forward
+    kinematics (:mod:`armlab.models._fk_kernel`) from numba's cache (compiled there on a first use);
+    a protocol declares it as its ``preload``."""
+    _kernel.load()
+    RobotKinematics.load_compiled()
 
 
 def stop_postures(scene: HandScene, stops: np.ndarray) -> np.ndarray:
@@ -127,7 +163,7 @@ def simulate_level_b(
             the perturbation's start).
         fs_hz: Hz, sample rate of ``displacement`` and of the output (a whole number of steps).
         sigma: co-contraction index of Eq. 2.2.4.
-        nthread: rollout threads (default: all cores).
+        nthread: threads stepping the trials (default: all cores).
 
     Returns:
         The clean signals; sample ``j`` is the state at the start of the perturbation's step
@@ -135,6 +171,7 @@ def simulate_level_b(
 
     Raises:
         SimulationError: a trial diverged or MuJoCo warned.
+        ConfigError: the field's stiffness turned negative on a trial (D = δ√K undefined).
     """
     model = scene.model
     dt = model.opt.timestep
@@ -145,75 +182,80 @@ def simulate_level_b(
     q_stop = stop_postures(scene, stops)
     jac = _jacobians(scene, q_stop)[stop_of]  # (n, 7, 2)
     q0 = q_stop[stop_of]
-    ref = np.asarray(stops, float)[stop_of]
+    ref = np.ascontiguousarray(np.asarray(stops, float)[stop_of])
     # robot joint targets of each sample (first-order IK around the stop; the hand's position is
     # measured, so the small second-order error only changes the executed excursion)
     targets = q0[:, None, :] + np.einsum("nij,nsj->nsi", jac, displacement)
 
-    spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
-    nstate = mujoco.mj_stateSize(model, spec)
-    data = mujoco.MjData(model)
-    state = np.empty((n, nstate))
-    for i in range(n):  # rest in equilibrium at the stop (n mj_forward calls, ~1 ms in all)
-        mujoco.mj_resetData(model, data)
-        data.qpos[scene.robot_qpos] = q0[i]
-        data.qpos[scene.hand_qpos[:2]] = ref[i]
-        data.ctrl[scene.robot_act] = q0[i]
-        mujoco.mj_forward(model, data)
-        mujoco.mj_getState(model, data, state[i], spec)
-    pos_cols = 1 + scene.hand_qpos[:2]  # state = [time, qpos, qvel, act, ...]
-    vel_cols = 1 + model.nq + scene.hand_dof[:2]
-    robot_cols = 1 + scene.robot_qpos
-    ft = scene.sensors["ft_force"]
-
-    datas = [mujoco.MjData(model) for _ in range(nthread or os.cpu_count() or 1)]
-    models = [model] * n
-    ctrl = np.zeros((n, 1, model.nu))
-    ctrl[:, 0, scene.robot_act] = q0
-    out_state = np.empty((n, 1, nstate))
-    out_sd = np.empty((n, 1, model.nsensordata))
-    n_settle = int(round(SETTLE_S / dt))
+    ft, acc = scene.sensors["ft_force"], scene.sensors["hand_acc"]
+    cols = np.r_[np.arange(ft.start, ft.stop), np.arange(acc.start, acc.stop)].astype(np.int64)
+    idx = np.array(
+        [
+            *scene.hand_qpos[:2],
+            *scene.hand_dof[:2],
+            *scene.field_act,
+            model.nq,
+            model.nv,
+            model.nu,
+            model.nsensordata,
+        ],
+        dtype=np.int64,
+    )
+    coef = field.coefficients_at(0.0)
+    k_sigma = np.asarray(field.k_sigma, float) * field.stiffness_scale
     hand_pos, hand_vel = np.empty((n, n_s, 2)), np.empty((n, n_s, 2))
-    robot_q, ft_force, human = np.empty((n, n_s, 7)), np.empty((n, n_s, 3)), np.empty((n, n_s, 2))
-    with mj_rollout.Rollout(nthread=len(datas)) as runner:
-        for step in range(n_settle + n_s * substeps):
-            q_h, qd_h = state[:, pos_cols], state[:, vel_cols]
-            f_h = -field.force(q_h, qd_h, q_h - ref, sigma)  # Eq. 2.2.1 (no inertia): the human's force
-            ctrl[:, 0, scene.field_act] = f_h
-            k = step - n_settle
-            sample = k // substeps if k >= 0 and k % substeps == 0 else -1
-            if k >= 0:  # servo target: the sample being moved to (held at the last one)
-                ctrl[:, 0, scene.robot_act] = targets[:, min(k // substeps + 1, n_s - 1)]
-            runner.rollout(
-                models,
-                datas,
-                state,
-                ctrl,
-                control_spec=mujoco.mjtState.mjSTATE_CTRL,
-                skip_checks=True,
-                nstep=1,
-                state=out_state,
-                sensordata=out_sd,
-            )
-            # every rollout call clears MuJoCo's warning counters: read them after each step
-            warned = warning_counts(datas)
-            if warned or not np.all(np.isfinite(out_state[:, 0])):
-                raise SimulationError(
-                    f"level-B simulation diverged or MuJoCo warned at t = {(k if k >= 0 else 0) * dt:.4f} s "
-                    f"of the perturbation ({warned or 'non-finite state'}); lower sim.timestep_s or "
-                    "simulation.stiffness_scale"
+    robot_q, sensor, human = np.empty((n, n_s, 7)), np.empty((n, n_s, cols.size)), np.empty((n, n_s, 2))
+    status = np.zeros(n, dtype=np.int64)
+    rest = (
+        idx,
+        cols,
+        scene.robot_qpos.astype(np.int64),
+        scene.robot_act.astype(np.int64),
+        ref,
+        coef,
+        k_sigma,
+        float(sigma),
+        np.asarray(field.delta, float),
+        np.ascontiguousarray(q0),
+        np.ascontiguousarray(targets),
+        int(round(SETTLE_S / dt)),
+        substeps,
+        hand_pos,
+        hand_vel,
+        robot_q,
+        sensor,
+        human,
+        status,
+    )
+    step_fn = mujoco_function_address("mj_step")
+    n_threads = max(1, min(n, nthread or os.cpu_count() or 1))
+    pool = [mujoco.MjData(model) for _ in range(min(n, DATA_POOL))]
+    data_addr, addr = np.zeros(n, dtype=np.int64), np.zeros((n, 4), dtype=np.int64)
+    with ThreadPoolExecutor(n_threads) as threads:
+        for first in range(0, n, len(pool)):
+            rows = np.arange(first, min(n, first + len(pool)), dtype=np.int64)
+            for i, data in zip(rows, pool, strict=False):  # rest in equilibrium at the stop
+                mujoco.mj_resetData(model, data)
+                data.qpos[scene.robot_qpos] = q0[i]
+                data.qpos[scene.hand_qpos[:2]] = ref[i]
+                data.ctrl[scene.robot_act] = q0[i]
+                mujoco.mj_forward(model, data)
+                data_addr[i] = data._address
+                addr[i] = [a.ctypes.data for a in (data.qpos, data.qvel, data.ctrl, data.sensordata)]
+            # the kernel releases the GIL: one contiguous share of the rows per thread
+            shares = np.array_split(rows, n_threads)
+            list(
+                threads.map(
+                    lambda r: _kernel.step_trials(step_fn, model._address, data_addr, addr, r, *rest), shares
                 )
-            if sample >= 0:
-                hand_pos[:, sample], hand_vel[:, sample] = q_h, qd_h
-                robot_q[:, sample] = state[:, robot_cols]
-                ft_force[:, sample] = out_sd[:, 0, ft]
-                human[:, sample] = f_h
-            state = out_state[:, 0].copy()
+            )
+            _check(status, rows, ref, warning_counts(pool[: len(rows)]))
     return LevelBTrials(
         hand_pos=hand_pos,
         hand_vel=hand_vel,
         robot_q=robot_q,
-        ft_force=ft_force,
+        ft_force=sensor[..., :3],
+        hand_acc=sensor[..., 3:5],
         human_force=human,
         fs_hz=fs_hz,
     )

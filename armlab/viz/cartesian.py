@@ -94,14 +94,17 @@ def format_cartesian_table(results: Mapping[str, Any]) -> str:
     cmp = results.get("level_b_vs_a")
     if cmp:
         lines.append(
-            "level B vs level A on the same paths (%; dynamics (hand inertia, servo compliance) = "
-            "B ideal sensors - A, sensors = B - B ideal):"
+            "level B vs level A on the same commanded paths (%): A; A on the path B executed; B with ideal "
+            "sensors; B ideal with m*a taken out (accelerometer); B as measured. Effects (points): "
+            "path = A executed - A, inertia = B ideal - A executed, sensors = B - B ideal:"
         )
         for name, r in cmp.items():
             lines.append(
-                f"  {name:18s} A {r['level_a_pct']:8.3g}  B ideal {r['level_b_ideal_sensors_pct']:8.3g}  "
-                f"B {r['level_b_pct']:8.3g}  dynamics {r['dynamics_effect_points']:+8.3g}  "
-                f"sensors {r['sensor_effect_points']:+8.3g}  "
+                f"  {name:18s} A {r['level_a_pct']:8.3g}  A exec {r['level_a_executed_path_pct']:8.3g}  "
+                f"B ideal {r['level_b_ideal_sensors_pct']:8.3g}  "
+                f"B comp {r['level_b_inertia_compensated_pct']:8.3g}  "
+                f"B {r['level_b_pct']:8.3g}  path {r['path_effect_points']:+8.3g}  "
+                f"inertia {r['inertia_effect_points']:+8.3g}  sensors {r['sensor_effect_points']:+8.3g}  "
                 f"peak m*a {r.get('inertial_force_peak_N', float('nan')):.3g} N"
                 f"  ({r['what']})"
             )

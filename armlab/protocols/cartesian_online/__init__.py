@@ -4,7 +4,8 @@ The MSc thesis's Chapter 3: a hand whose diagonal stiffness is a quadratic of it
 (Tables 3.1/3.2) is perturbed by a robot stopping on a reference path; five experiments identify
 it by least squares re-solved as data arrives, up to a polar model. Level B (default): the LWR
 and a hand with inertia in MuJoCo, measured by JR3/encoder models, beside level A (the thesis's own
-algebraic generator) on the same paths; level C comes later.
+algebraic generator) on the same paths; level A alone is ``simulation=level_a``; level C comes
+later.
 """
 
 from armlab.protocols.base import Protocol
@@ -14,6 +15,7 @@ from armlab.protocols.cartesian_online.config import (
     IdentificationConfig,
     SimulationConfig,
 )
+from armlab.sim.cartesian_level_b import load_level_b_compiled
 
 __all__ = [
     "PROTOCOL",
@@ -27,8 +29,9 @@ PROTOCOL = Protocol(
     paper="seeds/002: position-dependent Cartesian impedance, online LS, polar model (MSc thesis Ch. 3)",
     summary="quadratic hand stiffness field perturbed on a path; per-sequence, cumulative and recursive LS",
     schema=CartesianOnlineConfig,
-    groups={"sensors": "ideal", "simulation": "level_a"},
+    groups={"sensors": "ideal", "simulation": "level_b"},
     simulate=hooks.simulate,
+    preload=load_level_b_compiled,
     validate=preflight.validate,
     reestimate_group="identification",
     reestimate=hooks.reestimate,
@@ -37,6 +40,7 @@ PROTOCOL = Protocol(
     examples=(
         "run protocol=cartesian_online simulation=level_a simulation.force_noise_std_N=0.05",
         "run protocol=cartesian_online simulation.corner_s=0.02",
+        "run protocol=cartesian_online simulation.hand_mass_kg=0.1",
         "run protocol=cartesian_online simulation.stiffness_scale=0.05 seed=3",
         "estimate outputs/cartesian_online/<run> identification.r2_adj_threshold=0.99",
     ),

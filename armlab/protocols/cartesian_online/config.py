@@ -1,9 +1,10 @@
 """The typed experiment of ``cartesian_online`` (paper 002, thesis Ch. 3): the groups it reads.
 
-``simulation`` says how the five experiments are generated (level A: the thesis's own algebraic
-generator, the default until level B's estimates are validated against the field's truth; level
-B: the LWR and a hand with inertia in MuJoCo; level C is not built yet and is refused with the
-valid choices),
+``simulation`` says how the five experiments are generated (level B, the default: the LWR and a
+hand with inertia in MuJoCo, its estimates tested against the field's truth in
+tests/test_cartesian_level_b.py; level A: the thesis's own algebraic generator; level C: the
+conditioning lab's planar Hill arm as the truth, where the diagonal quadratic and the polar model
+are compared by held-out force VAF),
 ``identification`` how they are identified and scored (the group ``armlab estimate`` takes).
 Defaults are the thesis's (Tables 3.1-3.3, §3.1-3.5) or, where it is silent, spec 002's and
 docs/cartesian_online.md's documented choices.
@@ -19,6 +20,7 @@ from armlab.config.schema import ExperimentConfig, SensorsConfig
 from armlab.config.validate import check, choice
 
 __all__ = [
+    "HAND_MASS_MIN_KG",
     "IDENTIFICATION_CHOICES",
     "CartesianOnlineConfig",
     "IdentificationConfig",
@@ -28,11 +30,20 @@ __all__ = [
 
 #: How the experiments are generated: (A) the thesis's algebraic generator; (B) the LWR pushing a
 #: hand with inertia through its cuff in MuJoCo, the field as the human's force, measured through
-#: the JR3 F/T and LWR encoder models (level C, the Hill arm as truth, comes with a later slice).
-SimulationLevel = Literal["A", "B"]
+#: the JR3 F/T and LWR encoder models; (C) the planar Hill arm as the truth (its full,
+#: posture-dependent Cartesian impedance) on a circle within its reach.
+SimulationLevel = Literal["A", "B", "C"]
 #: Exp. 4 estimators: the thesis's Eq. 3.4.1 (constant damping columns) and the model's own D = δ√K.
 Exp4Method = Literal["linear", "sqrt_damping"]
 IDENTIFICATION_CHOICES: tuple[str, ...] = get_args(Exp4Method)
+
+#: kg, the lightest level-B hand accepted. The field is an explicit force on the hand (evaluated
+#: at the start of each step), and the cuff's connect constraint, whose stiffness MuJoCo scales by
+#: the effective mass, holds a light hand less and less. Measured on Exp. 4 at the default 0.5 ms
+#: step and Table 3.1's stiffness: at 10 g the hand's peak acceleration is 1.8 m/s² (as at 0.966 kg);
+#: at 1 g the hand vibrates against the cuff (357 m/s²), which halving the step removes
+#: (sqrt(K/m)·dt = 2.7 at 1 g, beyond the explicit limit of 2; 0.87 at 10 g).
+HAND_MASS_MIN_KG = 0.01
 
 if TYPE_CHECKING:
     Level = SimulationLevel
@@ -45,9 +56,10 @@ else:  # OmegaConf 2.3 rejects Literal field types: it reads these as str, __pos
 class SimulationConfig:
     """How the thesis's five experiments are generated (thesis Ch. 3; spec 002)."""
 
-    # A (default): the thesis's q_h = q_r + q_p, F = D(q_h) q̇_h + K(q_h) q_p (thesis Ch. 3);
-    # B: the LWR + hand in MuJoCo (armlab.sim.cartesian_level_b)
-    level: Level = "A"
+    # B (default): the LWR + hand in MuJoCo (armlab.sim.cartesian_level_b), level A on the same paths
+    # beside it; A: the thesis's q_h = q_r + q_p, F = D(q_h) q̇_h + K(q_h) q_p (thesis Ch. 3);
+    # C: the planar Hill arm's force on the handle (armlab.sim.cartesian_level_c)
+    level: Level = "B"
     # dimensionless factor on every stiffness coefficient of Table 3.1 (spec 002: its values are
     # 10-100x physiological hand stiffness; 1 is the thesis)
     stiffness_scale: float = 1.0
@@ -56,6 +68,9 @@ class SimulationConfig:
     # N, std of the force noise of the extra Exp. 4 run of spec 002's check 6 (0.05 N); 0 leaves
     # that run out
     noise_study_std_N: float = 0.05
+    # kg, level B's hand (hand + the forearm's share at the wrist: Winter 2009, Table 4.1, 75 kg
+    # subject; models/cartesian_hand/README.md); a test lowers it to show the inertia's effect
+    hand_mass_kg: float = 0.966
     # co-contraction index σ of Eq. 2.2.4 (thesis: never stated; spec 002 assumption 0)
     sigma: float = 0.0
     n_stops: int = 20  # stops over the 100 s path (thesis §3.1-3.5: 20 perturbations/sequences)
@@ -75,6 +90,11 @@ class SimulationConfig:
         for name in ("force_noise_std_N", "noise_study_std_N"):
             value = getattr(self, name)
             check(value >= 0, f"simulation.{name} must be >= 0 N (0 = noise-free), got {value}")
+        check(
+            math.isfinite(self.hand_mass_kg) and self.hand_mass_kg >= HAND_MASS_MIN_KG,
+            f"simulation.hand_mass_kg must be >= {HAND_MASS_MIN_KG:g} kg (default 0.966, Winter 2009), "
+            f"got {self.hand_mass_kg}",
+        )
         check(0.0 <= self.sigma <= 1.0, f"simulation.sigma must lie in [0, 1] (Eq. 2.2.4), got {self.sigma}")
         check(
             isinstance(self.n_stops, int) and 3 <= self.n_stops <= 200,

@@ -49,6 +49,7 @@ __all__ = [
     "CASES",
     "CHANNEL_UNITS",
     "CartesianRecording",
+    "case_trials",
     "field_from_attrs",
     "records_from_trials",
     "simulate_cartesian",
@@ -104,8 +105,15 @@ def _timeline(cfg: CartesianOnlineConfig, experiment: int, shape: str) -> StopTi
     )
 
 
-def _case_trials(case: str, rec: CartesianRecord, n_max: int) -> tuple[dict, dict]:
-    """Per-perturbation arrays of one record: channels (m, n_max, 2) and trial_meta (m,)."""
+def case_trials(
+    case: str, rec: CartesianRecord, n_max: int, kind: tuple[int, str] | None = None
+) -> tuple[dict, dict]:
+    """Per-perturbation arrays of one record: channels (m, n_max, k) and trial_meta (m,).
+
+    ``kind``: the (experiment, waveform) of the case (default :data:`CASES`'s entry); any record
+    with ``timeline``, ``force``, ``force_clean``, ``stiffness_true()`` and ``noise_std_n`` will do
+    (level C's :class:`~armlab.sim.cartesian_level_c.LevelCRecord`).
+    """
     tl = rec.timeline
     m = len(tl.directions)
     idx = np.flatnonzero(tl.perturbation >= 0)
@@ -122,7 +130,7 @@ def _case_trials(case: str, rec: CartesianRecord, n_max: int) -> tuple[dict, dic
         "true_hand_force": rec.force_clean[take],
         "true_stiffness": rec.stiffness_true()[take],
     }
-    experiment, shape = CASES[case]
+    experiment, shape = kind or CASES[case]
     stop = tl.perturbation_stop
     meta = {
         "case": np.full(m, case),
@@ -168,7 +176,7 @@ def simulate_cartesian(cfg: CartesianOnlineConfig) -> CartesianRecording:
             sigma=s.sigma,
         )
     n_max = max(int(np.bincount(r.timeline.perturbation[r.logged]).max()) for r in records.values())
-    parts = [_case_trials(case, rec, n_max) for case, rec in records.items()]
+    parts = [case_trials(case, rec, n_max) for case, rec in records.items()]
     channels = {k: np.concatenate([p[0][k] for p in parts]) for k in CHANNEL_UNITS}
     meta = {k: np.concatenate([p[1][k] for p in parts]) for k in parts[0][1]}
     truth = {
@@ -189,7 +197,7 @@ def simulate_cartesian(cfg: CartesianOnlineConfig) -> CartesianRecording:
         attrs={
             "protocol": cfg.protocol_name,
             "seed": cfg.seed,
-            "level": s.level,
+            "level": "A",  # this generator's trials; level B replaces them (level_b.py)
             "corner_s": s.corner_s,
             "truth_json": json.dumps(truth),
         },

@@ -12,8 +12,18 @@ from armlab.protocols.base import OutputContext, Simulated
 from armlab.protocols.cartesian_online.checks import NOISE_CHECK_LIMITS
 from armlab.protocols.cartesian_online.config import CartesianOnlineConfig, IdentificationConfig
 from armlab.protocols.cartesian_online.experiment import simulate_cartesian
-from armlab.protocols.cartesian_online.level_b import clean_trials, simulate_level_b_trials
-from armlab.protocols.cartesian_online.results import estimate_cartesian
+from armlab.protocols.cartesian_online.level_b import (
+    clean_trials,
+    executed_path_trials,
+    inertia_compensated_trials,
+    simulate_level_b_trials,
+)
+from armlab.protocols.cartesian_online.level_c import (
+    estimate_level_c,
+    format_level_c_table,
+    simulate_level_c_trials,
+)
+from armlab.protocols.cartesian_online.results import estimate_cartesian, estimate_headlines
 
 __all__ = [
     "HEADLINES",
@@ -109,38 +119,57 @@ def _headline(results: dict, path: tuple) -> float | None:
     return float(v)
 
 
-def level_comparison(results_a: dict, results_b_ideal: dict, results_b: dict, summary: dict) -> dict:
-    """How far the robot-and-hand dynamics (level B with ideal sensors: the hand's inertia, and the
-    position servos' compliance, which shrinks the executed excursion) and then the sensors (level B
-    as measured) move each experiment's headline error (:data:`HEADLINES`) from level A on the same
-    paths.
+def level_comparison(results: dict[str, dict], summary: dict) -> dict:
+    """How far level B's physics and sensors move each experiment's headline error
+    (:data:`HEADLINES`) from level A on the same commanded paths, split into three effects that
+    add up to the whole difference:
+
+    - ``path_effect_points``: level A's generator on the path level B executed minus level A (the
+      servos' compliance shortens the excursions; no inertia, ideal sensors);
+    - ``inertia_effect_points``: level B with ideal sensors minus that (the inertial force of the
+      hand and cuff in the F/T reading, which the thesis's massless model does not have);
+    - ``sensor_effect_points``: level B as measured minus level B with ideal sensors;
+
+    and ``level_b_inertia_compensated_pct``: ideal sensors with ``m·a`` taken out by the handle's
+    accelerometer (close to the executed path's when the compensation is right).
+
+    Args:
+        results: the results of ``a``, ``executed_path``, ``b_ideal``, ``b_compensated`` and
+            ``b`` (the estimates on each version of the trials).
+        summary: per case, the simulation's peak inertial force, peak force and saturated share.
 
     Returns:
-        experiment -> ``{"what", "level_a_pct", "level_b_ideal_sensors_pct", "level_b_pct",
-        "dynamics_effect_points", "sensor_effect_points"}`` plus the simulation's per-case peak
-        inertial force, peak force and saturated share (``summary``).
+        experiment -> ``{"what", "level_a_pct", "level_a_executed_path_pct",
+        "level_b_ideal_sensors_pct", "level_b_inertia_compensated_pct", "level_b_pct", and the
+        three effects}`` plus ``summary``'s entries of its case.
     """
     out = {}
     for name, (path, what) in HEADLINES.items():
-        a, bi, b = (_headline(r, path) for r in (results_a, results_b_ideal, results_b))
-        if a is None or bi is None or b is None:
+        v = {k: _headline(r, path) for k, r in results.items()}
+        if any(x is None for x in v.values()):
             continue
         case = name if name in summary else name.split("_sqrt")[0]
         out[name] = {
             "what": what,
-            "level_a_pct": a,
-            "level_b_ideal_sensors_pct": bi,
-            "level_b_pct": b,
-            "dynamics_effect_points": bi - a,
-            "sensor_effect_points": b - bi,
+            "level_a_pct": v["a"],
+            "level_a_executed_path_pct": v["executed_path"],
+            "level_b_ideal_sensors_pct": v["b_ideal"],
+            "level_b_inertia_compensated_pct": v["b_compensated"],
+            "level_b_pct": v["b"],
+            "path_effect_points": v["executed_path"] - v["a"],
+            "inertia_effect_points": v["b_ideal"] - v["executed_path"],
+            "sensor_effect_points": v["b"] - v["b_ideal"],
             **summary.get(case, {}),
         }
     return out
 
 
 def simulate(cfg: CartesianOnlineConfig) -> Simulated:
-    """Generate the five experiments (level A, and at level B the LWR's on the same paths);
-    estimation runs when the runner asks for it."""
+    """Generate the five experiments (level A, and at level B the LWR's on the same paths), or
+    level C's Hill-arm circle; estimation runs when the runner asks for it."""
+    if cfg.simulation.level == "C":
+        trials_c, scene_c = simulate_level_c_trials(cfg)
+        return Simulated(trials_c, scene_c, {}, lambda: estimate_level_c(trials_c, cfg.identification))
     rec = simulate_cartesian(cfg)
     if cfg.simulation.level == "A":
 
@@ -154,9 +183,14 @@ def simulate(cfg: CartesianOnlineConfig) -> Simulated:
 
     def estimate_b() -> tuple[dict, dict]:
         results, series = estimate_cartesian(trials_b, cfg.identification)
-        results_a, _ = estimate_cartesian(rec.trials, cfg.identification)
-        results_ideal, _ = estimate_cartesian(clean_trials(trials_b), cfg.identification)
-        results["level_b_vs_a"] = level_comparison(results_a, results_ideal, results, summary)
+        versions = {
+            "a": rec.trials,
+            "executed_path": executed_path_trials(trials_b),
+            "b_ideal": clean_trials(trials_b),
+            "b_compensated": inertia_compensated_trials(trials_b),
+        }
+        compared = {k: estimate_headlines(t, cfg.identification) for k, t in versions.items()}
+        results["level_b_vs_a"] = level_comparison({**compared, "b": results}, summary)
         for row in results["checks"]:  # spec 002's checks are defined on the thesis's level A
             row["applies"] = False
             row["note"] = (row.get("note", "") + " (level B: see level_b_vs_a)").strip()
@@ -170,6 +204,8 @@ def reestimate(trials: TrialSet, stored, overrides: list[str]) -> dict:
     ident = apply_overrides(
         stored_group(IdentificationConfig, stored, "identification"), "identification", overrides
     )
+    if str(trials.attrs.get("level", "A")) == "C":
+        return estimate_level_c(trials, ident)[0]
     results, _ = estimate_cartesian(trials, ident)
     return results
 
@@ -178,6 +214,8 @@ def outputs(ctx: OutputContext) -> dict:
     """The checks beside the thesis (table.txt), the figures and the recording."""
     viz, out_dir, cfg = ctx.viz, ctx.out_dir, ctx.cfg
     written = {"table": write_new(out_dir / "table.txt", format_table(ctx.results, viz) + "\n")}
+    if ctx.results.get("level") == "C":  # the comparison is the table; the figures are Exps. 1-5's
+        return written
     if cfg.output.figures:
         written.update(viz.plot_cartesian_figures(ctx.series, ctx.results, out_dir))
     if cfg.output.recording:
@@ -188,5 +226,7 @@ def outputs(ctx: OutputContext) -> dict:
 
 
 def format_table(results: dict, viz) -> str:
-    """Spec 002's checks beside the thesis's claims."""
+    """Spec 002's checks beside the thesis's claims (level C: its model comparison)."""
+    if results.get("level") == "C":
+        return format_level_c_table(results)
     return viz.format_cartesian_table(results)

@@ -18,8 +18,14 @@ channels by what the lab would measure when MuJoCo's LWR plays each commanded pe
   (the F/T sensor's clean reading: the robot's force on the hand, inertia included),
   ``human_force`` (the field's force on the hand) and ``true_stiffness`` at the true hand position.
 
-:func:`clean_trials` swaps the clean channels in (ideal sensors, hand inertia only), so the
-identification can be run three ways: level A, level B with ideal sensors, level B as measured.
+:func:`clean_trials` swaps the clean channels in (ideal sensors, hand inertia only);
+:func:`executed_path_trials` is level A's generator on the path level B executed (the field's
+force at level B's states: no inertia, ideal sensors, but the excursions the servos really made,
+shortened by their compliance); :func:`inertia_compensated_trials` takes the inertial force of the
+mass beyond the F/T sensor out of the clean force with the handle's accelerometer
+(``true_hand_acc``). The identification can so be run on level A, level A on the executed path,
+level B with ideal sensors and level B as measured, which splits level B's difference from level A
+into the executed path, the hand's inertia and the sensors.
 """
 
 from __future__ import annotations
@@ -39,6 +45,8 @@ __all__ = [
     "JR3_RANGE_N",
     "LEVEL_B_UNITS",
     "clean_trials",
+    "executed_path_trials",
+    "inertia_compensated_trials",
     "simulate_level_b_trials",
 ]
 
@@ -48,6 +56,7 @@ JR3_RANGE_N = 200.0
 LEVEL_B_UNITS = {
     "true_hand_pos": "m",
     "true_hand_vel": "m/s",
+    "true_hand_acc": "m/s^2",
     "human_force": "N",
 }
 
@@ -71,7 +80,7 @@ def simulate_level_b_trials(
         field's force, i.e. what the thesis's massless model misses), the peak |F| and the share
         of force samples at the JR3's range.
     """
-    scene = build_hand_scene(cfg.sim)
+    scene = build_hand_scene(cfg.sim, cfg.simulation.hand_mass_kg)
     meta = trials_a.trial_meta
     ref = np.asarray(trials_a.channels["ref_pos"])[:, 0]  # (n, 2) m, stopped during the trial
     stops, stop_of = np.unique(ref, axis=0, return_inverse=True)
@@ -105,6 +114,7 @@ def simulate_level_b_trials(
         true_stiffness=field.stiffness(sim.hand_pos, cfg.simulation.sigma),
         true_hand_pos=sim.hand_pos,
         true_hand_vel=sim.hand_vel,
+        true_hand_acc=sim.hand_acc,
         human_force=sim.human_force,
     )
     units = {**trials_a.units, **LEVEL_B_UNITS}
@@ -121,7 +131,7 @@ def simulate_level_b_trials(
             "saturated_fraction": float(sat[real[rows]].any(axis=-1).mean()),
             "excursion_max_m": float(np.abs(sim.hand_pos[rows] - ref[rows][:, None]).max()),
         }
-    attrs = {**trials_a.attrs, "level": "B"}
+    attrs = {**trials_a.attrs, "level": "B", "ft_load_mass_kg": scene.ft_load_mass_kg}
     trials = TrialSet(
         fs_hz=fs,
         onset_index=np.asarray(trials_a.onset_index),
@@ -133,21 +143,48 @@ def simulate_level_b_trials(
     return trials, scene.xml, summary
 
 
-def clean_trials(trials: TrialSet) -> TrialSet:
-    """Level-B trials with ideal sensors: the clean channels in place of the measured ones."""
-    ch = dict(trials.channels)
-    ref = np.asarray(ch["ref_pos"])
-    ch.update(
-        hand_pos=ch["true_hand_pos"],
-        hand_vel=ch["true_hand_vel"],
-        hand_force=ch["true_hand_force"],
-        pert_pos=np.asarray(ch["true_hand_pos"]) - ref,
-    )
+def _with_channels(trials: TrialSet, **channels: np.ndarray) -> TrialSet:
+    """``trials`` with some channels replaced."""
     return TrialSet(
         fs_hz=trials.fs_hz,
         onset_index=trials.onset_index,
-        channels=ch,
+        channels={**trials.channels, **channels},
         units=trials.units,
         trial_meta=trials.trial_meta,
         attrs=trials.attrs,
     )
+
+
+def clean_trials(trials: TrialSet) -> TrialSet:
+    """Level-B trials with ideal sensors: the clean channels in place of the measured ones."""
+    ch = trials.channels
+    return _with_channels(
+        trials,
+        hand_pos=ch["true_hand_pos"],
+        hand_vel=ch["true_hand_vel"],
+        hand_force=ch["true_hand_force"],
+        pert_pos=np.asarray(ch["true_hand_pos"]) - np.asarray(ch["ref_pos"]),
+    )
+
+
+def executed_path_trials(trials: TrialSet) -> TrialSet:
+    """Level A's generator on the path level B executed: the clean positions and velocities with
+    ``hand_force`` = the massless model's force there, ``−human_force`` (Eq. 2.2.1 without inertia;
+    the force the hand's field exerts on the robot)."""
+    return _with_channels(clean_trials(trials), hand_force=-np.asarray(trials.channels["human_force"]))
+
+
+def inertia_compensated_trials(trials: TrialSet) -> TrialSet:
+    """Level-B trials with ideal sensors and the hand's inertial force taken out.
+
+    The F/T sensor measures the force on everything beyond its site: the field's force plus
+    ``m·a`` of the mass ``m`` moving with the hand (``attrs['ft_load_mass_kg']``: the sensor's
+    tool-side half, the cuff's mount and the hand). ``hand_force = true_hand_force − m·a`` with
+    ``a`` the handle accelerometer's x, y (``true_hand_acc``, the same step as the F/T reading) is
+    then the massless model's force on the executed path (Eq. 2.2.1 without inertia, as the
+    thesis assumes), up to the rotation of the cuff's bodies about the flange.
+    """
+    mass = float(trials.attrs["ft_load_mass_kg"])
+    ch = trials.channels
+    force = np.asarray(ch["true_hand_force"]) - mass * np.asarray(ch["true_hand_acc"])
+    return _with_channels(clean_trials(trials), hand_force=force)

@@ -11,13 +11,28 @@ from __future__ import annotations
 from armlab.config.schema import SimConfig
 from armlab.errors import ConfigError
 from armlab.perturbations.ramp_waveforms import MIN_SAMPLES_PER_SEGMENT, TRAPEZOIDAL, TRIANGULAR
-from armlab.protocols.cartesian_online.config import CartesianOnlineConfig
+from armlab.protocols.cartesian_online.config import CartesianOnlineConfig, SimulationConfig
 
-__all__ = ["validate"]
+__all__ = [
+    "LEVEL_C_READS",
+    "LEVEL_C_UNREAD",
+    "validate",
+]
+
+#: the ``simulation`` fields level C reads, and those it does not (refused when changed)
+LEVEL_C_READS = ("force_noise_std_N", "n_stops", "pause_s", "corner_s")
+LEVEL_C_UNREAD = (
+    "stiffness_scale",
+    "noise_study_std_N",
+    "hand_mass_kg",
+    "sigma",
+    "sinusoid_omega_rad_s",
+    "spiral_end_fraction",
+)
 
 
 def validate(cfg: CartesianOnlineConfig) -> None:
-    """Raise :class:`ConfigError` on a setting level A cannot honour (never ignore it)."""
+    """Raise :class:`ConfigError` on a setting the chosen level cannot honour (never ignore it)."""
     s = cfg.simulation
     if s.level == "B":
         if cfg.sensors.preset != "ideal":
@@ -40,6 +55,24 @@ def validate(cfg: CartesianOnlineConfig) -> None:
             raise ConfigError(
                 "sim.* is not read at simulation.level=A (the thesis's algebraic generator has no physics "
                 "step); valid: leave sim at its defaults"
+            )
+        if s.hand_mass_kg != SimulationConfig().hand_mass_kg:
+            raise ConfigError(
+                "simulation.hand_mass_kg is not read at simulation.level=A (the thesis's model has no "
+                "inertia); valid: simulation=level_b"
+            )
+    if s.level == "C":
+        if cfg.sensors.preset != "ideal" or cfg.sim != SimConfig():
+            raise ConfigError(
+                "sensors.* presets and sim.* are not read at simulation.level=C (the Hill arm's force is "
+                "quasi-static, the robot an ideal position source); valid: simulation.force_noise_std_N"
+            )
+        defaults = SimulationConfig()
+        unread = [f for f in LEVEL_C_UNREAD if getattr(s, f) != getattr(defaults, f)]
+        if unread:
+            raise ConfigError(
+                f"simulation.{unread[0]} is not read at simulation.level=C (the Hill arm is the truth, on "
+                f"its own circle); valid there: {', '.join(LEVEL_C_READS)}"
             )
     # the rule of RampWaveform.sample; the trapezoid's 50 ms ramp is the shortest segment (§3.1.1)
     need = max(w.min_fs_hz for w in (TRIANGULAR, TRAPEZOIDAL))

@@ -40,6 +40,7 @@ __all__ = [
     "ENTRIES",
     "THESIS_ORDERS",
     "estimate_cartesian",
+    "estimate_headlines",
 ]
 
 #: the 2 x 2 entries of K and D named as in §3.5.2 (row: force, column: displacement / velocity)
@@ -223,6 +224,42 @@ def _appendix_a(rec) -> dict:
     }
 
 
+def _identify_exp1_to_4(
+    records: dict, ident: IdentificationConfig, grid: np.ndarray, results: dict, series: dict
+) -> None:
+    """Exps. 1-4 of ``records`` into ``results`` and ``series`` (their identifications and scores)."""
+    if "exp1_triangular" in records:
+        results["exp1"] = {"triangular": _exp1(records["exp1_triangular"])}
+        if "exp1_trapezoidal" in records:
+            results["exp1"]["trapezoidal"] = _exp1(records["exp1_trapezoidal"])
+            diff = (
+                results["exp1"]["triangular"]["k_error_pct"] - results["exp1"]["trapezoidal"]["k_error_pct"]
+            )
+            results["exp1"]["waveform_difference_points_max"] = float(np.max(np.abs(diff)))
+    if "exp2" in records:
+        results["exp2"] = _exp2(records["exp2"])
+    if "exp3" in records:
+        results["exp3"] = _exp3(records["exp3"])
+    for case in ("exp4", "exp4_noise"):
+        if case not in records:
+            continue
+        methods = ident.exp4_methods if case == "exp4" else ["linear"]  # check 6: the thesis's estimator
+        results[case] = {"noise_std_N": records[case].noise_std_n}
+        series[case] = {}
+        for method in methods:
+            results[case][method], series[case][method] = _exp4(records[case], method, grid)
+
+
+def estimate_headlines(trials: TrialSet, ident: IdentificationConfig) -> dict:
+    """Exps. 1-4 only (identifications and scores, as :func:`estimate_cartesian` reports them):
+    what the level comparison reads, without Exp. 5, check 7, Appendix A and the checks."""
+    records = records_from_trials(trials)
+    grid = disc_grid(CIRCLE_CENTRE_M, CIRCLE_RADIUS_M, ident.grid_points_per_axis)
+    results: dict = {}
+    _identify_exp1_to_4(records, ident, grid, results, {})
+    return results
+
+
 def estimate_cartesian(trials: TrialSet, ident: IdentificationConfig) -> tuple[dict, dict]:
     """Identify every case of the trials and score it (module docstring).
 
@@ -254,26 +291,7 @@ def estimate_cartesian(trials: TrialSet, ident: IdentificationConfig) -> tuple[d
         },
     }
     series: dict = {"records": records, "grid": grid, "field": field}
-    if "exp1_triangular" in records:
-        results["exp1"] = {"triangular": _exp1(records["exp1_triangular"])}
-        if "exp1_trapezoidal" in records:
-            results["exp1"]["trapezoidal"] = _exp1(records["exp1_trapezoidal"])
-            diff = (
-                results["exp1"]["triangular"]["k_error_pct"] - results["exp1"]["trapezoidal"]["k_error_pct"]
-            )
-            results["exp1"]["waveform_difference_points_max"] = float(np.max(np.abs(diff)))
-    if "exp2" in records:
-        results["exp2"] = _exp2(records["exp2"])
-    if "exp3" in records:
-        results["exp3"] = _exp3(records["exp3"])
-    for case in ("exp4", "exp4_noise"):
-        if case not in records:
-            continue
-        methods = ident.exp4_methods if case == "exp4" else ["linear"]  # check 6: the thesis's estimator
-        results[case] = {"noise_std_N": records[case].noise_std_n}
-        series[case] = {}
-        for method in methods:
-            results[case][method], series[case][method] = _exp4(records[case], method, grid)
+    _identify_exp1_to_4(records, ident, grid, results, series)
     if "exp4" in records:
         exp4 = next(iter(series["exp4"].values()))["result"]  # any method: both carry the linear fits
         results["rls"] = _rls(records["exp4"], exp4, grid)
