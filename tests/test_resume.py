@@ -320,6 +320,9 @@ def test_an_interrupted_sweep_without_out_names_its_default_folder_as_one_shell_
     assert shlex.split(command) == words
 
 
+# slow (make test-all, beside the Ray and submitit multiruns): ~32 s of CI's 5-minute budget for the
+# launcher's processes; the resume logic itself is checked in CI by the serial sweep above
+@pytest.mark.slow
 def test_joblib_sweep_interrupted_resumes_bit_identical_to_a_serial_one(tmp_path):
     """Same seed, serial or joblib, interrupted or not: bit-identical trials (~20 s)."""
     sweep = ["--multirun", "seed=0,1,2", *SMALL]
