@@ -222,7 +222,7 @@ def record_trials(
         q0 = np.asarray(cfg.arm.q0, float)
         paths, path_of = robot_target_paths(scene, hold, q0, plan, scenario.directions_rad, t_rel)
         muscle_base = hold.activation
-        if active:  # one command per sample, held over its physics steps by the rollout
+        if active:  # one command per sample, held over its substeps by the rollout
             muscle_base = sample_commands(hold.activation, drawing.result())
     who = TrialLabels(
         protocol=cfg.protocol_name,
@@ -247,7 +247,6 @@ def record_trials(
             substeps=substeps,
             who=who,
             target_rows=path_of,
-            muscle_hold=substeps,
         )
         loaded.result()
 

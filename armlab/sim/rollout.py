@@ -129,7 +129,6 @@ def simulate(
     nthread: int | None = None,
     who: TrialLabels | None = None,
     target_rows: np.ndarray | None = None,
-    muscle_hold: int = 1,
 ) -> SimResult:
     """Simulate a batch of trials from one settled state.
 
@@ -138,9 +137,9 @@ def simulate(
         initial_state: (nstate,) full-physics state every trial starts from.
         robot_targets: (n_trials, n_steps, 7) rad robot joint targets at every physics step, or
             (n_paths, n_steps, 7) with ``target_rows``.
-        muscle_base: (6,) activation commands without reflex, or (n_trials, ceil(n_steps /
-            muscle_hold), 6) per trial and step of ``muscle_hold`` physics steps (a subject whose
-            activation fluctuates, drawn per sample, see :mod:`armlab.sim.subject`).
+        muscle_base: (6,) activation commands without reflex, or (n_trials, ceil(n_steps / substeps), 6)
+            per trial and sample, each held over the sample's ``substeps`` physics steps (a subject
+            whose activation fluctuates, see :mod:`armlab.sim.subject`).
         reflex: reflex pathways (``enabled=False`` for none).
         substeps: physics steps per recorded sample.
         nthread: rollout threads (default: all cores).
@@ -148,8 +147,6 @@ def simulate(
         target_rows: (n_trials,) the row of ``robot_targets`` each trial follows (trials sharing
             a path share a row: each chunk gathers its targets, no (n_trials, n_steps, 7) copy);
             None: row i for trial i.
-        muscle_hold: physics steps each row of a per-step ``muscle_base`` holds (e.g. ``substeps``:
-            one command per sample, no (n_trials, n_steps, 6) copy).
 
     Returns:
         The clean signals, sampled every ``substeps`` steps.
@@ -175,13 +172,11 @@ def simulate(
         n_trials = target_rows.size
     muscle_base = np.asarray(muscle_base, float)
     per_step = muscle_base.ndim == 3
-    if muscle_hold < 1:
-        raise SimulationError(f"muscle_hold must be >= 1 physics step, got {muscle_hold}")
-    n_rows = -(-n_steps // muscle_hold)
+    n_rows = -(-n_steps // substeps)  # the samples the steps reach (the kernel reads row step // substeps)
     if per_step and muscle_base.shape != (n_trials, n_rows, len(MUSCLES)):
         raise SimulationError(
             f"muscle_base must be ({len(MUSCLES)},) or {(n_trials, n_rows, len(MUSCLES))} "
-            f"(one row per {muscle_hold} physics step(s)), got {muscle_base.shape}"
+            f"(one row per sample of {substeps} physics steps), got {muscle_base.shape}"
         )
     dt = model.opt.timestep
     if who is None:
@@ -279,7 +274,7 @@ def simulate(
                     ctrl,
                     muscle_cols,
                     base3,
-                    muscle_hold,
+                    substeps,
                     c0,
                     hist,
                     lag_s,
@@ -292,7 +287,7 @@ def simulate(
                 )
             else:
                 ctrl[:, :, muscle_cols] = (
-                    _held_rows(muscle_base, muscle_hold, c0, c1) if per_step else muscle_base
+                    _held_rows(muscle_base, substeps, c0, c1) if per_step else muscle_base
                 )
             step_args = dict(nstep=m, state=states, sensordata=sd, skip_checks=True)
             stepping = stepper.submit(runner.rollout, models, data, state, ctrl, **step_args)
