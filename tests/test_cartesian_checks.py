@@ -135,3 +135,17 @@ def test_exp4_exposes_its_prediction_and_linear_fits(short_trials):
             np.testing.assert_array_equal(r.linear_fits[a].rank, r.rank[:, a])
     # noise-free, the model's own 12 + 2 fit predicts the force to rounding (measured ~1e-16)
     assert identify_exp4(rec, method="sqrt_damping").force_nrmse.max() < 1e-12
+
+
+def test_exp4_on_too_few_sequences_reports_no_field_instead_of_failing():
+    # one stop's sequence cannot determine the 8 (linear) or 14 (sqrt-damping) parameters: neither
+    # method reports a field (NaN coefficients); the sqrt-damping fit, which has no solution at
+    # all, has no prediction either (NaN) instead of failing on the missing fit
+    from armlab.perturbations import experiment_timeline
+    from armlab.sim import simulate_level_a
+
+    rec = simulate_level_a(experiment_timeline(4, n_stops=1), THESIS_FIELD)
+    for method in ("linear", "sqrt_damping"):
+        r = identify_exp4(rec, method=method)
+        assert np.all(np.isnan(r.coefficients)), method
+    assert np.all(np.isnan(identify_exp4(rec, method="sqrt_damping").force_nrmse))

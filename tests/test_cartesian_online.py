@@ -6,8 +6,6 @@ this implementation measures a different margin the comment says what it measure
 
 from __future__ import annotations
 
-import time
-
 import numpy as np
 import pytest
 from numpy.testing import assert_allclose
@@ -58,12 +56,10 @@ def test_model_values_at_the_circle_centre():
     )
 
 
-def test_all_five_experiments_generate_in_well_under_a_second():
-    t0 = time.perf_counter()
+def test_level_a_force_is_the_model_force_on_every_sample():
+    # (the five experiments' generation time, ~0.1 s against the issue's 1 s, is a benchmark's
+    # business, not a timed unit test's: benchmarks/bench_realtime.py)
     records = [simulate_level_a(experiment_timeline(e), THESIS_FIELD) for e in range(1, 6)]
-    elapsed = time.perf_counter() - t0
-    # measured ~0.1 s on the 2-core machine; 1 s is the issue's budget for the five
-    assert elapsed < 1.0
     # the model force is exactly D(q_h)·q̇_h + K(q_h)·q_p on every sample (Eq. 2.2.1 without inertia)
     r = records[3]
     tl = r.timeline

@@ -283,8 +283,11 @@ def identify_exp4(
                     coef[b, a] = fit.k
                     damp[b, a, 0] = fit.delta
             last = nl[-1]
-            k_at = quadratic_basis(q_h) @ last.k  # K_aa(q_h)
-            pred[:, a] = k_at * q_p[:, a] + last.delta * np.sqrt(np.maximum(k_at, 0.0)) * qd_h[:, a]
+            if last is None:  # still rank deficient after the last sequence: no prediction (as linear)
+                pred[:, a] = np.nan
+            else:
+                k_at = quadratic_basis(q_h) @ last.k  # K_aa(q_h)
+                pred[:, a] = k_at * q_p[:, a] + last.delta * np.sqrt(np.maximum(k_at, 0.0)) * qd_h[:, a]
         nrmse[a] = np.sqrt(np.mean((pred[:, a] - f[:, a]) ** 2) / np.mean(f[:, a] ** 2))
     pts = disc_grid() if grid is None else np.asarray(grid, dtype=float)
     stops = record.timeline.stop_position

@@ -35,8 +35,9 @@ import mujoco
 import numpy as np
 
 from armlab.config.schema import ArmConfig, CuffConfig, RobotConfig, SimConfig
-from armlab.errors import ConfigError
-from armlab.models.ground_truth import impedance_fd
+from armlab.errors import ConfigError, DataError
+from armlab.models import planar_arm
+from armlab.models.ground_truth import joint_impedance
 from armlab.models.scene import Scene, build_scene
 
 __all__ = [
@@ -74,36 +75,27 @@ class HillArm:
         return self.scene.l1, self.scene.l2
 
     def joint_angles(self, x: np.ndarray) -> np.ndarray:
-        """Two-link inverse kinematics with the elbow flexed: (..., 2) m -> (..., 2) rad.
+        """Two-link inverse kinematics with the elbow flexed (:func:`planar_arm.inverse`):
+        (..., 2) m -> (..., 2) rad.
 
         Raises:
             ConfigError: a point outside the arm's reach.
         """
-        x = np.asarray(x, dtype=float)
         l1, l2 = self.lengths
-        c2 = (np.sum(x * x, axis=-1) - l1 * l1 - l2 * l2) / (2 * l1 * l2)
-        if np.any(np.abs(c2) > 1):
-            raise ConfigError(f"a point lies outside the arm's reach ({abs(l1 - l2):.3f}-{l1 + l2:.3f} m)")
-        q2 = np.arccos(c2)
-        q1 = np.arctan2(x[..., 1], x[..., 0]) - np.arctan2(l2 * np.sin(q2), l1 + l2 * np.cos(q2))
-        return np.stack([q1, q2], axis=-1)
+        try:
+            return planar_arm.inverse(x, l1, l2)
+        except DataError:
+            raise ConfigError(
+                f"a point lies outside the arm's reach ({abs(l1 - l2):.3f}-{l1 + l2:.3f} m)"
+            ) from None
 
     def hand_position(self, q: np.ndarray) -> np.ndarray:
-        """Forward kinematics: (..., 2) rad -> (..., 2) m in the arm's frame."""
-        q = np.asarray(q, dtype=float)
-        l1, l2 = self.lengths
-        a, b = q[..., 0], q[..., 0] + q[..., 1]
-        return np.stack([l1 * np.cos(a) + l2 * np.cos(b), l1 * np.sin(a) + l2 * np.sin(b)], axis=-1)
+        """Forward kinematics (:func:`planar_arm.forward`): (..., 2) rad -> (..., 2) m."""
+        return planar_arm.forward(q, *self.lengths)
 
     def jacobian(self, q: np.ndarray) -> np.ndarray:
-        """``∂x/∂q``: (..., 2) rad -> (..., 2, 2) m/rad."""
-        q = np.asarray(q, dtype=float)
-        l1, l2 = self.lengths
-        a, b = q[..., 0], q[..., 0] + q[..., 1]
-        s1, c1, s12, c12 = np.sin(a), np.cos(a), np.sin(b), np.cos(b)
-        row_x = np.stack([-l1 * s1 - l2 * s12, -l2 * s12], axis=-1)
-        row_y = np.stack([l1 * c1 + l2 * c12, l2 * c12], axis=-1)
-        return np.stack([row_x, row_y], axis=-2)
+        """``∂x/∂q`` (:func:`planar_arm.jacobian`): (..., 2) rad -> (..., 2, 2) m/rad."""
+        return planar_arm.jacobian(q, *self.lengths)
 
     def frozen_data(self) -> mujoco.MjData:
         """A fresh ``MjData`` at the model's initial state with every muscle's ``act`` at
@@ -116,7 +108,7 @@ class HillArm:
     def cartesian_impedance(self, x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The truth at reference points: ``K_C = J^-T K_q J^-1``, ``D_C = J^-T D_q J^-1``.
 
-        ``K_q, D_q`` by :func:`~armlab.models.ground_truth.impedance_fd` (central differences of
+        ``K_q, D_q`` by :func:`~armlab.models.ground_truth.joint_impedance` (central differences of
         MuJoCo's actuator + passive joint forces, activations frozen) at each point's posture.
 
         Args:
@@ -135,7 +127,7 @@ class HillArm:
         for i, qi in enumerate(q):  # 8 mj_forward calls per point (the truth, not the run's path)
             data.qpos[sc.arm_qpos] = qi
             mujoco.mj_getState(model, data, state, spec)
-            k_q[i], d_q[i] = impedance_fd(model, state, sc.arm_qpos, sc.arm_dof)
+            k_q[i], d_q[i] = joint_impedance(sc, state)
         j_inv = np.linalg.inv(self.jacobian(q))
         k = np.einsum("nji,njk,nkl->nil", j_inv, k_q, j_inv)
         d = np.einsum("nji,njk,nkl->nil", j_inv, d_q, j_inv)

@@ -33,16 +33,14 @@ __all__ = [
     "f64_pointer",
     "joint_forces",
     "mujoco_function_address",
+    "mujoco_library_path",
 ]
 
 
-@cache
-def mujoco_function_address(name: str) -> int:
-    """Address of the MuJoCo C function ``name`` in the library the bindings load.
-
-    The Python package ships its shared library beside its modules (``libmujoco.so.<version>``
-    on Linux, ``libmujoco.<version>.dylib`` on macOS, ``mujoco.dll`` on Windows); loading it again
-    returns the process's one copy.
+def mujoco_library_path() -> Path:
+    """MuJoCo's shared library, the one the Python bindings load: the package ships it beside its
+    modules (``libmujoco.so.<version>`` on Linux, ``libmujoco.<version>.dylib`` on macOS,
+    ``mujoco.dll`` on Windows).
 
     Raises:
         SimulationError: the library is not found beside the ``mujoco`` package.
@@ -51,8 +49,18 @@ def mujoco_function_address(name: str) -> int:
     found = sorted(folder.glob("libmujoco.so*")) + sorted(folder.glob("libmujoco*.dylib"))
     found += sorted(folder.glob("mujoco.dll"))
     if not found:
-        raise SimulationError(f"MuJoCo's shared library was not found in {folder}")
-    return int(ctypes.cast(getattr(ctypes.CDLL(str(found[0])), name), ctypes.c_void_p).value)
+        raise SimulationError(
+            f"MuJoCo's shared library was not found beside its Python bindings in {folder} "
+            "(looked for libmujoco.so*, libmujoco*.dylib, mujoco.dll); reinstall mujoco==3.17.*"
+        )
+    return found[0]
+
+
+@cache
+def mujoco_function_address(name: str) -> int:
+    """Address of the MuJoCo C function ``name`` in :func:`mujoco_library_path` (loading it again
+    returns the process's one copy)."""
+    return int(ctypes.cast(getattr(ctypes.CDLL(str(mujoco_library_path())), name), ctypes.c_void_p).value)
 
 
 @intrinsic

@@ -22,7 +22,6 @@ that MuJoCo did not reset a diverged state (its clock restarts), read from ``dat
 from __future__ import annotations
 
 import math
-from pathlib import Path
 from typing import NamedTuple
 
 import mujoco
@@ -30,7 +29,7 @@ import numpy as np
 from llvmlite.binding import load_library_permanently
 from numba import njit, types
 
-from armlab.errors import ArmlabError
+from armlab.sim._mujoco_calls import mujoco_library_path
 
 __all__ = [
     "CURRENT_DUTY",
@@ -50,15 +49,7 @@ OK, SAFETY, GRASP, CURRENT_RUN, CURRENT_DUTY, NONFINITE = range(6)
 
 def _load_mujoco_symbols() -> None:
     """Make the C symbols of the MuJoCo library the bindings loaded visible to compiled code."""
-    folder = Path(mujoco.__file__).parent
-    found = sorted(folder.glob("libmujoco.so*")) + sorted(folder.glob("libmujoco*.dylib"))
-    found += sorted(folder.glob("mujoco.dll"))
-    if not found:
-        raise ArmlabError(
-            f"MuJoCo's shared library was not found beside its Python bindings in {folder} "
-            "(looked for libmujoco.so*, libmujoco*.dylib, mujoco.dll); reinstall mujoco==3.17.*"
-        )
-    load_library_permanently(str(found[0]))
+    load_library_permanently(str(mujoco_library_path()))
 
 
 _load_mujoco_symbols()

@@ -4,8 +4,9 @@ The MSc thesis's Chapter 3: a hand whose diagonal stiffness is a quadratic of it
 (Tables 3.1/3.2) is perturbed by a robot stopping on a reference path; five experiments identify
 it by least squares re-solved as data arrives, up to a polar model. Level B (default): the LWR
 and a hand with inertia in MuJoCo, measured by JR3/encoder models, beside level A (the thesis's own
-algebraic generator) on the same paths; level A alone is ``simulation=level_a``; level C comes
-later.
+algebraic generator) on the same paths; level A alone is ``simulation=level_a``; level C
+(``simulation=level_c``): the planar Hill arm as the truth, the diagonal quadratic against the
+polar model.
 """
 
 from armlab.protocols.base import Protocol

@@ -36,7 +36,7 @@ __all__ = [
 ]
 
 #: ``scene.xml`` of a level A run: the thesis's generator has no physics scene (an empty model
-#: saying so; levels B and C will write their composed MJCF here)
+#: saying so; levels B and C write their composed MJCF instead)
 LEVEL_A_SCENE = (
     '<mujoco model="cartesian_online_level_a">\n'
     "  <!-- level A (thesis Ch. 3): the algebraic generator q_h = q_r + q_p, "

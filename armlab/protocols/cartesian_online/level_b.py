@@ -37,8 +37,7 @@ from armlab.models.cartesian_field import QuadraticImpedanceField
 from armlab.models.cartesian_hand_scene import build_hand_scene
 from armlab.models.robot_fk import RobotKinematics
 from armlab.protocols.cartesian_online.config import CartesianOnlineConfig
-from armlab.sensors.channel import apply_channel
-from armlab.sensors.presets import JR3_FORCE, LWR_ENCODER
+from armlab.sensors.presets import SensorSuite, measure
 from armlab.sim.cartesian_level_b import simulate_level_b
 
 __all__ = [
@@ -94,12 +93,15 @@ def simulate_level_b_trials(
         sigma=float(cfg.simulation.sigma),
     )
     fs = trials_a.fs_hz
-    rng_enc, rng_ft, rng_white = np.random.default_rng([cfg.seed, 2]).spawn(3)
+    rng_sensors, rng_white = np.random.default_rng([cfg.seed, 2]).spawn(2)
     kin = RobotKinematics.from_scene(scene)
     pos_true, rot_true = kin.forward(sim.robot_q)
-    q_meas = apply_channel(sim.robot_q, fs, LWR_ENCODER, rng_enc)
-    pos_meas, rot_meas = kin.forward(q_meas)
-    f_site = np.clip(apply_channel(sim.ft_force, fs, JR3_FORCE, rng_ft), -JR3_RANGE_N, JR3_RANGE_N)
+    # the LWR's encoders and the JR3 (the conditioning lab's realistic suite), then its saturation
+    measured = measure(
+        {"robot_q": sim.robot_q, "ft_force": sim.ft_force}, SensorSuite.realistic(), fs, rng_sensors
+    )
+    pos_meas, rot_meas = kin.forward(measured["robot_q"])
+    f_site = np.clip(measured["ft_force"], -JR3_RANGE_N, JR3_RANGE_N)
     force_true = _world_xy(rot_true, sim.ft_force)
     extra = np.asarray(meta["noise_std_N"], float)[:, None, None]  # level A's white noise per case
     force = _world_xy(rot_meas, f_site) + extra * rng_white.standard_normal(force_true.shape)

@@ -21,9 +21,9 @@ import numpy as np
 from armlab.config.schema import ArmConfig
 from armlab.data.trial import TrialSet
 from armlab.errors import DataError
-from armlab.estimation.cartesian_regressors import quadratic_field_regressor
 from armlab.estimation.field_adequacy import ADEQUACY_MODELS, fit_field_models
 from armlab.estimation.field_scoring import relative_error_pct
+from armlab.models.cartesian_field import quadratic_basis
 from armlab.models.hill_arm_field import LEVEL_C_CIRCLE_CENTRE_M, LEVEL_C_CIRCLE_RADIUS_M, build_hill_arm
 from armlab.perturbations.cartesian_timeline import SEQUENCE_DIRECTIONS, stop_path_times, stop_timeline
 from armlab.perturbations.ramp_waveforms import ramp_waveform
@@ -126,11 +126,7 @@ def estimate_level_c(trials: TrialSet, ident: IdentificationConfig) -> tuple[dic
     k_true = d["true_stiffness"][first].reshape(-1, 2, 2)
     pos = d["ref_pos"][first]
     diag_theta = fits["diagonal_quadratic"].theta
-    unit = np.ones_like(pos)  # a unit displacement: the regressor's first six columns are K_aa's monomials
-    k_diag = np.stack(
-        [quadratic_field_regressor(pos, unit, 0 * unit, a)[0][:, :6] @ diag_theta[a][:6] for a in (0, 1)],
-        axis=1,
-    )
+    k_diag = quadratic_basis(pos) @ np.stack([diag_theta[a][:6] for a in (0, 1)], axis=1)  # K_aa(pos)
     truth_diag = np.stack([k_true[:, 0, 0], k_true[:, 1, 1]], axis=1)
     coupling = np.abs(k_true[:, 0, 1]) / np.sqrt(k_true[:, 0, 0] * k_true[:, 1, 1])
     results = {
