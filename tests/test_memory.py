@@ -37,3 +37,19 @@ def test_a_run_function_decorated_with_it_runs_without_the_advice():
         assert setter(True) is True
     finally:
         setter(original)
+
+
+def test_frozen_views_and_their_bases_are_made_writeable_again_in_either_order():
+    # a saved channel can be a view of another saved array (Scene.sensors_of): thawing must not
+    # depend on the order they were frozen in
+    import numpy as np
+
+    from armlab.runner.run import _freeze, _thaw
+
+    for order in ("view first", "base first"):
+        base = np.zeros((4, 6))
+        view = base[:, 2:4]
+        frozen = _freeze([view, base] if order == "view first" else [base, view])
+        assert not base.flags.writeable and not view.flags.writeable
+        _thaw(frozen)
+        assert base.flags.writeable and view.flags.writeable, order

@@ -116,3 +116,21 @@ def test_the_real_time_varying_ankle_recording_gets_a_time_varying_verdict(tmp_p
     assert op["time_varying_nominal_gap"] < op["stationary_nominal_gap"]
     assert (out / "operating_point.png").is_file()
     assert "## Operating point" in (out / "report.md").read_text()
+
+
+def test_a_time_varying_partial_verdict_is_reported_as_a_partial_explanation():
+    # [operating_point_impedance, "unknown"] (tv_pilot's verdict: the time-varying nominal accepted,
+    # too much left) reads as the core's partial case, naming the accepted effect, not as an
+    # explained gap "then unknown"
+    from armlab.diagnosis.report_text import verdict_paragraph
+
+    r = {
+        "verdict": ["operating_point_impedance", "unknown"],
+        "partial": ["operating_point_impedance"],
+        "gap": {"nominal": 0.2, "noise_floor": 0.01},
+        "how_far": [{"held_out_gap": 0.2}, {"held_out_gap": 0.15}],
+        "ranking": [],
+    }
+    text = verdict_paragraph(r, {"none_tolerance": 0.15, "min_explained": 0.5})
+    assert "explains only part of it" in text
+    assert "operating" in text.lower()

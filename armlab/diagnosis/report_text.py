@@ -205,7 +205,8 @@ def verdict_paragraph(r: Mapping[str, Any], settings: Mapping[str, Any] | None) 
         )
     partial = list(r.get("partial") or [])
     removed = (nominal - final) / excess0 if excess0 > 0 else 0.0
-    if verdict == ["unknown"] and partial:
+    # ["unknown"], or a time-varying [operating_point_impedance, ..., "unknown"]: a partial explanation
+    if verdict[-1:] == ["unknown"] and partial:
         final_words = f"gap {fmt_pct(final)}, {fmt_ratio(final, floor)} the floor"
         return (
             f"**Verdict: unknown — the gap is real and the catalogue explains only part of it.** The "

@@ -68,6 +68,13 @@ def _freeze(arrays) -> list[np.ndarray]:
     return frozen
 
 
+def _thaw(frozen: list[np.ndarray]) -> None:
+    """Make :func:`_freeze`'s arrays writeable again: the ones that own their memory first (NumPy
+    refuses a view while its base is read-only, whichever order they were frozen in)."""
+    for arr in sorted(frozen, key=lambda a: a.base is not None):
+        arr.flags.writeable = True
+
+
 def _run(cfg: ExperimentConfig, out_dir: Path, config_yaml: str, timing: dict) -> dict:
     protocol = registry.get(cfg.protocol_name, need="run")
     check_effects(protocol, cfg)
@@ -117,8 +124,7 @@ def _run(cfg: ExperimentConfig, out_dir: Path, config_yaml: str, timing: dict) -
             if saving is not None:
                 saving.result()
     finally:  # the writer has finished (leaving the pool waits for it)
-        for arr in frozen:
-            arr.flags.writeable = True
+        _thaw(frozen)
     results["files"] = {k: str(v) for k, v in written.items()}
     timing["outputs_s"] = time.perf_counter() - t2
     return results

@@ -22,7 +22,6 @@ from armlab.sim.arm5_reflex import (
 from armlab.sim.arm5_trials import (
     AMPLITUDE_RAD,
     CHUNK_STEPS,
-    PATH_POINTS,
     RECORDED_SENSORS,
     StiffnessPlan,
     StiffnessRecord,
@@ -114,7 +113,6 @@ __all__ = [
     "reflex_stiffness_fd",
     "AMPLITUDE_RAD",
     "CHUNK_STEPS",
-    "PATH_POINTS",
     "RECORDED_SENSORS",
     "StiffnessPlan",
     "StiffnessRecord",

@@ -239,10 +239,7 @@ def simulate(
 
     def keep(c0: int, c1: int, state_in, states, sd, ctrl, warned) -> None:
         """Check chunk [c0, c1) and keep its samples (while the next chunk steps)."""
-        if (
-            warned or kernel.first_bad_step(np.ascontiguousarray(state_in[:, 0]), states, dt) >= 0
-        ):  # it raises, naming the trial
-            check_rollout(who, state_in, states, data, dt, np.arange(c0 + 1, c1 + 1) * dt, warned=warned)
+        check_rollout(who, state_in, states, data, dt, np.arange(c0 + 1, c1 + 1) * dt, warned=warned)
         # keep the samples whose last physics step falls in this chunk: steps c0 + o,
         # c0 + o + substeps, ... (step s ends sample (s + 1) / substeps - 1)
         o = (substeps - 1 - c0) % substeps

@@ -20,7 +20,7 @@ in the scoring band) and ``residual_tests_final`` (the residual tests of the fin
 - ``vaf_per_trial.png``: held-out VAF per trial and stage, with the best VAF the noise allows;
 - ``operating_point.png`` (time-varying recordings only, results holding ``operating_point``):
   stiffness and damping fitted in bins of the operating angle (± one standard error) and the
-  time-varying nominal's quadratics, with the stationary nominal's value as a dashed line.
+  time-varying nominal's quadratics, with its value at the mean angle as a dashed line.
 
 :func:`diagnosis_recording` writes every trial's torques, residuals and joint angle on the
 ``trial_time`` timeline (s from the trial's start) into one ``.rrd`` file. Matplotlib is driven
@@ -253,8 +253,6 @@ def _operating_point_figure(groups, path: Path) -> Path:
         ax.set_ylabel(f"{k} ({unit})")
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=7)
-    for ax in axes[2:]:
-        ax.set_visible(False)
     verdicts = "; ".join(f"{label}: {_verdict(r)}" for label, r, _ in groups)
     fig.suptitle(f"Impedance against the operating angle ({verdicts})", fontsize=10)
     return save_png(fig, path)
