@@ -131,3 +131,15 @@ def test_bad_input_is_refused():
         static_stiffness(z, z, z, z[:, :4])
     with pytest.raises(DataError, match="both g_pre and g_post"):
         static_stiffness(z, z, z, z, g_pre=z)
+
+
+def test_as_many_disturbances_as_joints_leave_no_noise_estimate():
+    # with N = n the fit passes through every point: its residual is zero by construction, so the
+    # standard error must be unknown (NaN), not zero (false certainty); the estimate is still exact
+    rng = np.random.default_rng(3)
+    k = rng.normal(size=(5, 5))
+    k = k @ k.T + 5 * np.eye(5)
+    dq = rng.normal(0.0, 0.08, (5, 5))
+    fit = static_stiffness(np.zeros((5, 5)), dq, np.zeros((5, 5)), dq @ k.T)
+    np.testing.assert_allclose(fit.K_ls, k, rtol=1e-9)  # exact data: rounding only
+    assert np.all(np.isnan(fit.K_ls_std))

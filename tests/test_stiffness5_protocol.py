@@ -129,6 +129,8 @@ def test_marker_hold_is_causal():
         ("sensors.fs_hz=1000", r"sensors.fs_hz=1000 Hz: .* valid: 2000"),
         ("sim.timestep_s=0.001", r"sim.timestep_s=0.001 s: .* valid: 0.0005"),
         ("estimation.post_interval_s=[0.2,0.6]", r"post_interval .* must lie in the hold"),
+        # a floor of 0.95 leaves no room to push 10 N: the force task fails before any run folder
+        ("trials.a_min=0.95", r"trials.conditions '.*' with trials.a_min=0.95: "),
     ],
 )
 def test_bad_settings_are_refused_naming_the_valid_choices(override, message):

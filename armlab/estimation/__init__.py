@@ -80,6 +80,10 @@ from armlab.estimation.joint_ls import (
     regressor,
     validate,
 )
+from armlab.estimation.least_squares import (
+    LeastSquares,
+    least_squares,
+)
 from armlab.estimation.levy import (
     PAPER_STRUCTURES,
     FitIndices,
@@ -187,7 +191,9 @@ __all__ = [
     "frobenius_residual",
     "inverse_kinematics",
     "JointCentreFit",
+    "LeastSquares",
     "joint_centre",
+    "least_squares",
     "SPDStiffness",
     "area_criterion",
     "chen_mcinroy",

@@ -78,6 +78,9 @@ def inverse_kinematics(
     pos_d: np.ndarray,
     q_init: np.ndarray,
     *,
+    # rad: a step this small changes no angle beyond rounding (the solution's own precision is
+    # ~1e-15 rad on clean data); 1e-9 would give the same angles to 1e-10 rad in 2/3 of the
+    # iterations on noisy markers (measured: 15 vs 24), the default keeps the recovery tests exact
     tol: float = 1e-12,
     max_iter: int = 50,
 ) -> IKResult:

@@ -14,6 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armlab.errors import DataError, EstimationError
+from armlab.estimation.least_squares import least_squares
 
 __all__ = [
     "JointCentreFit",
@@ -79,15 +80,14 @@ def joint_centre(p1: np.ndarray, rot1: np.ndarray, p2: np.ndarray, rot2: np.ndar
         raise EstimationError(f"a joint centre needs at least 3 samples, got {n}")
     a = np.concatenate([rot1, -rot2], axis=2).reshape(3 * n, 6)
     b = (p2 - p1).reshape(3 * n)
-    x, _, rank, sv = np.linalg.lstsq(a, b, rcond=None)
-    if rank < 6:
+    ls = least_squares(a, b)
+    x = ls.x
+    if ls.rank < 6:
         raise EstimationError(
-            f"the joint-centre regressor has rank {rank} < 6: the clusters must rotate relative to each "
+            f"the joint-centre regressor has rank {ls.rank} < 6: the clusters must rotate relative to each "
             "other about at least two independent axes during the calibration motion"
         )
-    res = a @ x - b
-    dof = max(3 * n - 6, 1)
-    cov = np.linalg.inv(a.T @ a) * (res @ res) / dof
+    cov = ls.inv_normal * ls.residual_variance
     d1, d2 = x[:3], x[3:]
     r1 = p1 + rot1 @ d1
     r2 = p2 + rot2 @ d2
@@ -97,5 +97,5 @@ def joint_centre(p1: np.ndarray, rot1: np.ndarray, p2: np.ndarray, rot2: np.ndar
         centre=0.5 * (r1 + r2),
         rms_gap=float(np.sqrt(np.mean(np.sum((r1 - r2) ** 2, axis=1)))),
         covariance=cov,
-        condition=float(sv[0] / sv[-1]),
+        condition=ls.condition,
     )

@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armlab.errors import DataError, EstimationError
+from armlab.estimation.least_squares import least_squares
 from armlab.models.limb_kinematics import LimbKinematics
 
 __all__ = [
@@ -94,22 +95,20 @@ def static_inertial_regression(
         raise EstimationError(f"the static regression needs at least 3 configurations, got {len(q)}")
     y = static_regressor(kin, q, g).reshape(-1, 9)
     b = wrench[:, [2, 3, 4]].reshape(-1)
-    scale = np.linalg.norm(y, axis=0)
-    x, _, rank, sv = np.linalg.lstsq(y / scale, b, rcond=None)
-    if rank < 9:
+    ls = least_squares(y, b, scale_columns=True)
+    if ls.rank < 9:
         raise EstimationError(
-            f"the static regressor has rank {rank} < 9: the configurations must rotate the upper arm and "
+            f"the static regressor has rank {ls.rank} < 9: the configurations must rotate the upper arm and "
             "the forearm about independent axes"
         )
-    xi = x / scale
+    xi = ls.x
     res = (y @ xi - b).reshape(-1, 3)
-    dof = max(y.shape[0] - 9, 1)
-    cov = np.linalg.inv(y.T @ y) * float(np.sum(res**2)) / dof
+    cov = ls.inv_normal * ls.residual_variance  # NaN with 3 configurations (no dof)
     return StaticInertialFit(
         xi_red=xi,
         covariance=cov,
         rms_residual=np.sqrt(np.mean(res**2, axis=0)),
-        condition=float(sv[0] / sv[-1]),
+        condition=ls.condition,
     )
 
 

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from armlab.errors import DataError, EstimationError
+from armlab.estimation.least_squares import least_squares
 from armlab.estimation.spd_stiffness import SPDStiffness, chen_mcinroy
 
 __all__ = [
@@ -96,10 +97,9 @@ def static_stiffness(
     if shape[0] < shape[1]:
         raise EstimationError(f"need at least n = {shape[1]} disturbances, got {shape[0]}")
     spd = chen_mcinroy(A, B)  # raises on a singular A^T A before the inverse below
-    x_ls = np.linalg.lstsq(A, B, rcond=None)[0]
-    dof = max(shape[0] - shape[1], 1)
-    sigma2 = np.sum((A @ x_ls - B) ** 2, axis=0) / dof  # (n,) per torque component
-    x_std = np.sqrt(np.outer(np.diag(np.linalg.inv(A.T @ A)), sigma2))
+    ls = least_squares(A, B)
+    x_ls = ls.x
+    x_std = np.sqrt(np.outer(np.diag(ls.inv_normal), ls.residual_variance))  # NaN with N = n (no dof)
     return StaticStiffness(
         K_ls=x_ls.T, K_ls_std=x_std.T, K=spd.K, spd=spd, A=A, B=B, gravity_compensated=g_pre is not None
     )

@@ -194,8 +194,9 @@ def condition_stiffness(
         qs.append(q)
         taus.append(external_joint_torque(kin.jacobian(q), w))
         forces.append(-w[:, :3])
-    g_pre = gravity_torque_from_fit(kin, xi_red, qs[0])
-    g_post = gravity_torque_from_fit(kin, xi_red, qs[1])
+    g = -float(np.asarray(geo.gravity)[2])  # m/s², the same gravity as the tool's weight above
+    g_pre = gravity_torque_from_fit(kin, xi_red, qs[0], g)
+    g_post = gravity_torque_from_fit(kin, xi_red, qs[1], g)
     q_work = qs[0].mean(axis=0)
     return ConditionStiffness(
         estimate=static_stiffness(qs[0], qs[1], taus[0], taus[1], g_pre, g_post),

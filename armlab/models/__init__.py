@@ -79,6 +79,7 @@ from armlab.models.limb_kinematics import (
 from armlab.models.oustaloup import FractionalElement, oustaloup_zpk
 from armlab.models.robot_fk import (
     RobotKinematics,
+    quat_to_mat,
 )
 from armlab.models.scene import (
     MODELS_DIR,
@@ -122,6 +123,7 @@ __all__ = [
     "gravity_torque",
     "inertial_truth",
     "joint_centre_truth",
+    "quat_to_mat",
     "stiffness_fd",
     "ARM5_JOINTS",
     "ARM5_MUSCLES",

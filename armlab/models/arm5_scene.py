@@ -18,7 +18,15 @@ import numpy as np
 
 from armlab.errors import ModelError
 from armlab.models.arm_5dof import ARM5_JOINTS, ARM5_MUSCLES
-from armlab.models.scene import SensorReadout, compile_mjcf, mjcf, model_file, named_id, sensor_slices
+from armlab.models.scene import (
+    CONNECT_SOLIMP,
+    SensorReadout,
+    compile_mjcf,
+    mjcf,
+    model_file,
+    named_id,
+    sensor_slices,
+)
 
 __all__ = [
     "ARM5_LAB_TIMESTEP_S",
@@ -49,7 +57,7 @@ ROBOT_KP = (20000.0, 20000.0, 12000.0, 12000.0, 12000.0, 4000.0, 4000.0)
 ROBOT_KV = (480.0, 1500.0, 300.0, 540.0, 300.0, 120.0, 120.0)
 # The rigid-cuff weld: time constant 2 timesteps (MuJoCo's stable minimum), impedance close to 1
 # (as armlab.models.scene.CONNECT_SOLIMP for the conditioning lab's connect)
-WELD_SOLIMP = (0.99, 0.999, 0.001, 0.5, 2.0)
+WELD_SOLIMP = CONNECT_SOLIMP
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)

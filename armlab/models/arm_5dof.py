@@ -13,6 +13,7 @@ import numpy as np
 
 from armlab.errors import ModelError
 from armlab.models.limb_kinematics import LimbKinematics
+from armlab.models.robot_fk import quat_to_mat
 from armlab.models.scene import model_file, named_id, sensor_slices
 
 __all__ = [
@@ -122,12 +123,6 @@ def load_arm_5dof() -> Arm5Dof:
     )
 
 
-def _quat_mat(quat: np.ndarray) -> np.ndarray:
-    out = np.zeros(9)
-    mujoco.mju_quat2Mat(out, np.asarray(quat, float))
-    return out.reshape(3, 3)
-
-
 def limb_kinematics(arm: Arm5Dof) -> LimbKinematics:
     """The true kinematic chain of the model (joint centres, axes, wrist frame) at q = 0."""
     m = arm.model
@@ -148,8 +143,8 @@ def limb_kinematics(arm: Arm5Dof) -> LimbKinematics:
         base_rot=data.xmat[upper].reshape(3, 3).copy(),
         shoulder=data.xpos[upper].copy(),
         elbow_offset=m.body_pos[forearm].copy(),
-        forearm_rot0=_quat_mat(m.body_quat[forearm]),
+        forearm_rot0=quat_to_mat(m.body_quat[forearm]),
         wrist_offset=m.site_pos[wrist].copy(),
-        wrist_rot0=_quat_mat(m.site_quat[wrist]),
+        wrist_rot0=quat_to_mat(m.site_quat[wrist]),
         axes=m.jnt_axis[joints].copy(),
     )

@@ -20,10 +20,12 @@ from armlab.models.scene import Scene, named_id
 
 __all__ = [
     "RobotKinematics",
+    "quat_to_mat",
 ]
 
 
-def _quat_to_mat(q: np.ndarray) -> np.ndarray:
+def quat_to_mat(q: np.ndarray) -> np.ndarray:
+    """(3, 3) rotation matrix of a unit quaternion (4,) (w, x, y, z; MuJoCo's ``mju_quat2Mat``)."""
     m = np.empty(9)
     mujoco.mju_quat2Mat(m, np.asarray(q, float))
     return m.reshape(3, 3)
@@ -81,7 +83,7 @@ class RobotKinematics:
             base_pos=data.xpos[parent].copy(),
             base_rot=data.xmat[parent].reshape(3, 3).copy(),
             link_pos=model.body_pos[bodies].copy(),
-            link_rot=np.stack([_quat_to_mat(q) for q in model.body_quat[bodies]]),
+            link_rot=np.stack([quat_to_mat(q) for q in model.body_quat[bodies]]),
             axes=model.jnt_axis[joints].copy(),
             contact_pos=r_last.T @ (data.site_xpos[scene.contact_site] - data.xpos[last]),
             ft_rot=r_last.T @ data.site_xmat[site_ft].reshape(3, 3),

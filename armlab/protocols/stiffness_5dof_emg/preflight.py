@@ -7,10 +7,14 @@ averaging intervals against the trial's record, and the force task of every chos
 
 from __future__ import annotations
 
+import numpy as np
+
 from armlab.config.validate import check
 from armlab.errors import ConfigError
 from armlab.models.arm5_scene import ARM5_LAB_TIMESTEP_S
+from armlab.models.arm_5dof import load_arm_5dof
 from armlab.protocols.stiffness_5dof_emg.config import Stiffness5dofConfig
+from armlab.sim.arm5_force_task import PRELOAD_CONDITIONS, force_task_activations
 from armlab.sim.arm5_trials import TrialTiming
 
 __all__ = ["LAB_FS_HZ", "LAB_INTEGRATOR", "validate"]
@@ -52,3 +56,9 @@ def validate(cfg: Stiffness5dofConfig) -> None:
             f"estimation.pre_interval_s / post_interval_s do not fit the record set by trials.pre_s, "
             f"rise_s, hold_s: {exc}"
         ) from None
+    arm = load_arm_5dof()
+    for name in t.conditions:  # each pre-load must be holdable with activations in [a_min, 1]
+        try:
+            force_task_activations(arm, arm.q0, np.asarray(PRELOAD_CONDITIONS[name], float), t.a_min)
+        except ConfigError as exc:
+            raise ConfigError(f"trials.conditions {name!r} with trials.a_min={t.a_min:g}: {exc}") from None
