@@ -21,7 +21,6 @@ imports only NumPy, SciPy and :mod:`armlab.errors`.
 from __future__ import annotations
 
 import math
-import os
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from functools import lru_cache
@@ -30,6 +29,7 @@ from typing import Literal
 import numpy as np
 from scipy import signal
 
+from armlab.cpus import usable_cpus
 from armlab.errors import ConfigError, DataError
 
 __all__ = [
@@ -390,7 +390,7 @@ def by_row_halves(fill: Callable[[slice], None], n_rows: int) -> None:
     each row alone: ``fill`` writes its rows of a preallocated output, so the result is
     bit-identical to one call over every row. An error in either half is raised.
     """
-    if n_rows < 2 or (os.cpu_count() or 1) < 2:
+    if n_rows < 2 or usable_cpus() < 2:
         fill(slice(0, n_rows))
         return
     half = n_rows // 2

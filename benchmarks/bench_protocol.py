@@ -20,7 +20,6 @@ Prints each budget and ratio as ``<what>: <value> (target <op> <value>) OK|MISSE
 
 from __future__ import annotations
 
-import os
 import tempfile
 import time
 from pathlib import Path
@@ -29,6 +28,7 @@ import mujoco
 import numpy as np
 from mujoco import rollout
 
+from armlab.cpus import usable_cpus
 from armlab.data.h5io import read_trials
 from armlab.estimation.joint_ls import estimate, estimate_windows
 from armlab.estimation.processing import ProcessingConfig, joint_signals
@@ -102,7 +102,7 @@ def main() -> None:
     n = tr.n_trials
     nstep = int(round(sim_s / n / scene.model.opt.timestep))
     ctrl = np.broadcast_to(hold.ctrl, (n, nstep, scene.model.nu))
-    nthread = os.cpu_count() or 1  # armlab's rollout default (armlab.sim.rollout.simulate)
+    nthread = usable_cpus()  # armlab's rollout default (armlab.sim.rollout.simulate)
     data = [mujoco.MjData(scene.model) for _ in range(nthread)]
     with small_pages():  # the run's memory policy (without it the first touch of the 1 GB output stalls)
         t1 = time.perf_counter()

@@ -221,11 +221,9 @@ def test_a_remembered_spectrum_is_never_handed_out_for_a_changed_signal():
 def test_row_blocks_filtered_on_threads_equal_one_call(monkeypatch):
     # lowpass_noise filters rows (axis 0) in two blocks on two threads above ~1e6 elements: every
     # row filtered alone by the same sections, so bit-identical to one sosfilt call
-    import os
-
     from armlab.dsp import _SPLIT_MIN_SIZE, _sosfilt_rows, butterworth
 
-    monkeypatch.setattr(os, "cpu_count", lambda: 2)  # the threaded path even on a 1-core machine
+    monkeypatch.setattr("armlab.dsp.usable_cpus", lambda: 2)  # the threaded path even on a 1-core machine
     sos = butterworth(2.0, 1000.0, 2)
     x = np.random.default_rng(0).standard_normal((5, _SPLIT_MIN_SIZE // 5 + 7, 2))
     assert x.size >= _SPLIT_MIN_SIZE

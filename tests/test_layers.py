@@ -18,6 +18,7 @@ ROOT = Path(__file__).resolve().parents[1] / "armlab"
 LAYERS: dict[str, int] = {
     "armlab": 0,
     "armlab.errors": 0,
+    "armlab.cpus": 0,
     "armlab.progress": 0,
     "armlab.config": 0,
     "armlab.dsp": 0,

@@ -67,11 +67,9 @@ def test_solve_ik_rejects_unreachable_target():
 
 def test_kinematics_by_trial_halves_on_threads_equal_one_call(monkeypatch):
     # the lab computes the chain for the two halves of the trials on two threads: bit-identical
-    import os
-
     from armlab.sim.lab import _forward_by_halves
 
-    monkeypatch.setattr(os, "cpu_count", lambda: 2)  # the threaded path even on a 1-core machine
+    monkeypatch.setattr("armlab.dsp.usable_cpus", lambda: 2)  # the threaded path even on a 1-core machine
     lab = make_lab("hill", False)
     fk = RobotKinematics.from_scene(lab.scene)
     q = lab.hold.robot_target + 0.1 * np.random.default_rng(0).standard_normal((5, 40, 7))

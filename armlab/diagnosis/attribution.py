@@ -22,7 +22,6 @@ tolerances set (:meth:`DiagnosisConfig.with_rules`).
 
 from __future__ import annotations
 
-import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
@@ -31,6 +30,7 @@ import numpy as np
 from armlab import progress
 from armlab.config.diagnosis import DiagnosisConfig
 from armlab.config.effects import EFFECTS
+from armlab.cpus import usable_cpus
 from armlab.diagnosis.families import FittedModel, ModelFamily, Surrogate, fit_model
 from armlab.errors import ConfigError
 
@@ -143,7 +143,7 @@ def select_effects(
 
         # the candidates' fits are independent: on threads (NumPy's FFTs, SciPy's filters and
         # BLAS release the GIL), each the same computation as alone, so the same numbers
-        with ThreadPoolExecutor(max_workers=os.cpu_count() or 1) as pool:
+        with ThreadPoolExecutor(max_workers=usable_cpus()) as pool:
             fits = {
                 n: pool.submit(
                     fit_model,

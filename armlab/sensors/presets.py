@@ -12,7 +12,6 @@ against a datasheet it is marked *assumption* with the reasoning behind it.
 from __future__ import annotations
 
 import math
-import os
 from collections.abc import Mapping
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, fields
@@ -20,6 +19,7 @@ from typing import ClassVar
 
 import numpy as np
 
+from armlab.cpus import usable_cpus
 from armlab.errors import ConfigError
 from armlab.sensors.channel import ChannelSpec, apply_channel
 
@@ -304,7 +304,7 @@ def measure(
     # concurrently on the cores (NumPy and SciPy release the GIL in their array loops); the results
     # are bit-identical to measuring them one after the other, and the first channel in order that
     # fails raises, as it would serially.
-    with ThreadPoolExecutor(min(len(clean), os.cpu_count() or 1) or 1) as pool:
+    with ThreadPoolExecutor(min(len(clean), usable_cpus()) or 1) as pool:
         jobs = {
             name: pool.submit(
                 apply_channel,

@@ -18,7 +18,6 @@ were tared (their drift, :func:`armlab.sensors.presets.measure`'s ``t0_s``).
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass
 
 import mujoco
@@ -27,6 +26,7 @@ from mujoco import rollout as mj_rollout
 from scipy.interpolate import CubicSpline
 
 from armlab.config.schema import ReflexConfig
+from armlab.cpus import usable_cpus
 from armlab.errors import ConfigError
 from armlab.models.arm5_scene import Arm5Scene
 from armlab.models.limb_kinematics import LimbKinematics
@@ -209,7 +209,7 @@ def settle_conditions(
         ctrl[c, 0, scene.robot_act] = robot_q
     nstep = int(round(settle_s / model.opt.timestep))
     ctrl = np.repeat(ctrl, nstep, axis=1)
-    datas = [mujoco.MjData(model) for _ in range(os.cpu_count() or 1)]
+    datas = [mujoco.MjData(model) for _ in range(usable_cpus())]
     states, _ = mj_rollout.rollout(model, datas, init, ctrl, nstep=nstep)
     who = TrialLabels(
         protocol="stiffness trials",
@@ -321,7 +321,7 @@ def simulate_stiffness_trials(
     state = np.ascontiguousarray(held[plan.condition])
     keep = np.r_[tuple(np.arange(scene.sensors[s].start, scene.sensors[s].stop) for s in RECORDED_SENSORS)]
     out = np.empty((n, n_steps, keep.size))
-    datas = [mujoco.MjData(model) for _ in range(nthread or os.cpu_count() or 1)]
+    datas = [mujoco.MjData(model) for _ in range(nthread or usable_cpus())]
     ctrl = np.zeros((n, CHUNK_STEPS, model.nu))
     ctrl[:, :, scene.muscle_act] = acts[plan.condition][:, None, :]
     who = TrialLabels(

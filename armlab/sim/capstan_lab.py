@@ -21,7 +21,6 @@ Clean channels (robot frame unless said, ``(n_trials, n_samples, 2)``):
 
 from __future__ import annotations
 
-import os
 from collections.abc import Sequence
 
 import mujoco
@@ -29,6 +28,7 @@ import numpy as np
 from mujoco import rollout as mj_rollout
 
 from armlab import progress
+from armlab.cpus import usable_cpus
 from armlab.errors import SimulationError
 from armlab.models.capstan_scene import CapstanScene
 from armlab.perturbations.sum_of_sines import SumOfSines
@@ -139,7 +139,7 @@ def simulate_capstan(
             f"per-step muscle commands must have shape ({n_trials}, {n_steps}, n_muscles), "
             f"got {np.shape(muscle_ctrl)}"
         )
-    nthread = nthread or os.cpu_count() or 1
+    nthread = nthread or usable_cpus()
     data = [mujoco.MjData(model) for _ in range(min(nthread, n_trials))]
     state = np.tile(np.asarray(initial_state, float), (n_trials, 1))
     sd_out = np.empty((n_trials, n_samples, model.nsensordata))

@@ -26,13 +26,13 @@ short settle (:data:`SETTLE_S`) before the perturbation begins.
 
 from __future__ import annotations
 
-import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import mujoco
 import numpy as np
 
+from armlab.cpus import usable_cpus
 from armlab.errors import ConfigError, SimulationError
 from armlab.models.cartesian_field import QuadraticImpedanceField
 from armlab.models.cartesian_hand_scene import HAND_HEIGHT_M, HandScene
@@ -228,7 +228,7 @@ def simulate_level_b(
         status,
     )
     step_fn = mujoco_function_address("mj_step")
-    n_threads = max(1, min(n, nthread or os.cpu_count() or 1))
+    n_threads = max(1, min(n, nthread or usable_cpus()))
     pool = [mujoco.MjData(model) for _ in range(min(n, DATA_POOL))]
     data_addr, addr = np.zeros(n, dtype=np.int64), np.zeros((n, 4), dtype=np.int64)
     with ThreadPoolExecutor(n_threads) as threads:

@@ -46,7 +46,6 @@ effect the torque that fluctuates with the activation (equal values give exactly
 from __future__ import annotations
 
 import math
-import os
 from dataclasses import dataclass
 
 import mujoco
@@ -55,6 +54,7 @@ from mujoco import rollout as mj_rollout
 from scipy import interpolate, signal
 
 from armlab.config.effects import EffectsConfig, Reflex, enabled_effects
+from armlab.cpus import usable_cpus
 from armlab.dsp import lowpass_noise, second_order_ba, second_order_lowpass
 from armlab.errors import ConfigError, DataError
 from armlab.models.joint_rig_scene import Joint1DofScene, JointSubject, build_joint_rig_scene
@@ -370,7 +370,7 @@ def _rollout_trials(
         k: np.zeros((n_trials, n)) for k in ("motor", "limb", "limb_velocity", "pedal", "torque", "reflex")
     }
     limb_v = rec["limb_velocity"]
-    datas = [mujoco.MjData(m) for _ in range(min(n_trials, os.cpu_count() or 1))]
+    datas = [mujoco.MjData(m) for _ in range(min(n_trials, usable_cpus()))]
     with mj_rollout.Rollout(nthread=len(datas)) as runner:
         for i0 in range(0, n, chunk):
             i1 = min(n, i0 + chunk)

@@ -10,7 +10,6 @@ This is exact (no approximation of the delay) and keeps Python out of the per-st
 
 from __future__ import annotations
 
-import os
 from concurrent.futures import ThreadPoolExecutor, wait
 from dataclasses import dataclass
 
@@ -20,6 +19,7 @@ from mujoco import rollout as mj_rollout
 
 from armlab import progress
 from armlab.config.schema import ReflexConfig
+from armlab.cpus import usable_cpus
 from armlab.errors import SimulationError
 from armlab.models.scene import MUSCLES, Scene
 from armlab.sim import _chunk_kernel as kernel
@@ -196,7 +196,7 @@ def simulate(
         tuple(np.arange(scene.sensors[f"vel_{m}"].start, scene.sensors[f"vel_{m}"].stop) for m in MUSCLES)
     ]
 
-    data = [mujoco.MjData(model) for _ in range(nthread or os.cpu_count() or 1)]
+    data = [mujoco.MjData(model) for _ in range(nthread or usable_cpus())]
     spec = mujoco.mjtState.mjSTATE_FULLPHYSICS
     mujoco.mj_setState(model, data[0], initial_state, spec)
     mujoco.mj_forward(model, data[0])

@@ -11,10 +11,11 @@ lowest-index failing trial, the one a serial loop would have raised.
 
 from __future__ import annotations
 
-import os
 from collections.abc import Callable
 from concurrent.futures import ThreadPoolExecutor
 from typing import TypeVar
+
+from armlab.cpus import usable_cpus
 
 __all__ = ["run_trials"]
 
@@ -40,7 +41,7 @@ def run_trials(
         Whatever ``simulate`` raised for the lowest failing index; trials after it that had not
         started are not run.
     """
-    nthread = min(nthread or os.cpu_count() or 1, n_trials)
+    nthread = min(nthread or usable_cpus(), n_trials)
     tick = done or (lambda: None)
     if nthread <= 1:
         out = []
