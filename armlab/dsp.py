@@ -360,9 +360,15 @@ def lowpass_noise(
     """Unit-rms Gaussian noise through a 2nd-order Butterworth low-pass, stationary from sample 0.
 
     White noise of ``shape`` (time on axis 1), lengthened by a burn-in of
-    ``burn_in_periods / corner_hz`` s that is filtered and dropped, is drawn as one
-    ``rng.standard_normal`` call and divided by the filter's exact white-noise gain (the rms of
-    its impulse response over 20 corner periods), so its stationary rms is 1.
+    ``burn_in_periods / corner_hz`` s that is filtered and dropped, is drawn by
+    ``rng.standard_normal`` in row order and divided by the filter's exact white-noise gain (the
+    rms of its impulse response over 20 corner periods), so its stationary rms is 1.
+
+    The rows (axis 0) are drawn and filtered in blocks of about :data:`_BLOCK_SIZE` elements, the
+    next block drawn while the last one is filtered on a second thread (SciPy releases the GIL):
+    the generator fills an array in C order one normal after another, and every row is filtered
+    alone, so the result is bit-identical to one ``standard_normal`` call of the whole lengthened
+    shape filtered at once, without the whole burn-in ever in memory.
 
     Raises:
         ConfigError: ``corner_hz`` not in (0, fs_hz / 2), the message naming it as ``name``.
@@ -374,12 +380,32 @@ def lowpass_noise(
     impulse = np.zeros(int(math.ceil(20.0 * fs_hz / corner_hz)))
     impulse[0] = 1.0
     gain = math.sqrt(float(np.sum(signal.sosfilt(sos, impulse) ** 2)))  # output std per unit input
-    white = rng.standard_normal((shape[0], n_burn + shape[1], *shape[2:]))
-    return _sosfilt_rows(sos, white)[:, n_burn:] / gain
+    row_shape = (n_burn + shape[1], *shape[2:])
+    out = np.empty(shape)
+
+    def keep(rows: slice, white: np.ndarray) -> None:
+        np.divide(signal.sosfilt(sos, white, axis=1)[:, n_burn:], gain, out=out[rows])
+
+    block = max(1, _BLOCK_SIZE // max(1, math.prod(row_shape)))
+    blocks = [slice(r0, min(shape[0], r0 + block)) for r0 in range(0, shape[0], block)]
+    if len(blocks) < 2 or usable_cpus() < 2:
+        for rows in blocks:
+            keep(rows, rng.standard_normal((rows.stop - rows.start, *row_shape)))
+        return out
+    with ThreadPoolExecutor(1) as filtering:
+        pending = None
+        for rows in blocks:
+            white = rng.standard_normal((rows.stop - rows.start, *row_shape))  # while the last filters
+            if pending is not None:
+                pending.result()
+            pending = filtering.submit(keep, rows, white)
+        pending.result()
+    return out
 
 
-# elements: below ~1e6 (a few ms of filtering) a second thread's start-up outweighs what it saves
-_SPLIT_MIN_SIZE = 1 << 20
+# elements of one block of rows lowpass_noise draws and filters (8 MB): large enough that handing a
+# block to the filtering thread costs nothing next to its work, small enough to stay in cache
+_BLOCK_SIZE = 1 << 20
 
 
 def by_row_halves(fill: Callable[[slice], None], n_rows: int) -> None:
@@ -396,17 +422,3 @@ def by_row_halves(fill: Callable[[slice], None], n_rows: int) -> None:
     half = n_rows // 2
     with ThreadPoolExecutor(2) as pool:
         list(pool.map(fill, (slice(0, half), slice(half, None))))
-
-
-def _sosfilt_rows(sos: np.ndarray, x: np.ndarray) -> np.ndarray:
-    """``signal.sosfilt(sos, x, axis=1)``, the rows (axis 0) filtered in two blocks on two threads
-    (:func:`by_row_halves`; SciPy releases the GIL while it filters)."""
-    if x.size < _SPLIT_MIN_SIZE:
-        return signal.sosfilt(sos, x, axis=1)
-    out = np.empty(x.shape)
-
-    def block(rows: slice) -> None:
-        out[rows] = signal.sosfilt(sos, x[rows], axis=1)
-
-    by_row_halves(block, x.shape[0])
-    return out

@@ -218,13 +218,22 @@ def test_a_remembered_spectrum_is_never_handed_out_for_a_changed_signal():
     assert not np.array_equal(again, first)
 
 
-def test_row_blocks_filtered_on_threads_equal_one_call(monkeypatch):
-    # lowpass_noise filters rows (axis 0) in two blocks on two threads above ~1e6 elements: every
-    # row filtered alone by the same sections, so bit-identical to one sosfilt call
-    from armlab.dsp import _SPLIT_MIN_SIZE, _sosfilt_rows, butterworth
+@pytest.mark.parametrize("cores", [1, 2])
+def test_lowpass_noise_in_row_blocks_equals_one_draw_filtered_at_once(monkeypatch, cores):
+    # lowpass_noise draws and filters the rows in blocks (the next drawn while the last filters on
+    # a second thread): bit-identical to one standard_normal call of the lengthened shape filtered
+    # at once, on one core and on two
+    from armlab.dsp import _BLOCK_SIZE, butterworth, lowpass_noise
 
-    monkeypatch.setattr("armlab.dsp.usable_cpus", lambda: 2)  # the threaded path even on a 1-core machine
-    sos = butterworth(2.0, 1000.0, 2)
-    x = np.random.default_rng(0).standard_normal((5, _SPLIT_MIN_SIZE // 5 + 7, 2))
-    assert x.size >= _SPLIT_MIN_SIZE
-    np.testing.assert_array_equal(_sosfilt_rows(sos, x), signal.sosfilt(sos, x, axis=1))
+    monkeypatch.setattr("armlab.dsp.usable_cpus", lambda: cores)
+    fs, fc, periods, shape = 1000.0, 2.0, 4.0, (7, 300, 2)
+    n_burn = int(math.ceil(periods * fs / fc))
+    monkeypatch.setattr("armlab.dsp._BLOCK_SIZE", 3 * (n_burn + shape[1]) * shape[2])  # 3 rows a block
+    assert _BLOCK_SIZE >= 1 << 20  # (the module's own block: 8 MB)
+    got = lowpass_noise(np.random.default_rng(4), shape, fs, fc, burn_in_periods=periods)
+    sos = butterworth(fc, fs, 2)
+    impulse = np.zeros(int(math.ceil(20.0 * fs / fc)))
+    impulse[0] = 1.0
+    gain = math.sqrt(float(np.sum(signal.sosfilt(sos, impulse) ** 2)))
+    white = np.random.default_rng(4).standard_normal((shape[0], n_burn + shape[1], shape[2]))
+    np.testing.assert_array_equal(got, signal.sosfilt(sos, white, axis=1)[:, n_burn:] / gain)
