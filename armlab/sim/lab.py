@@ -223,7 +223,7 @@ def record_trials(
         paths, path_of = robot_target_paths(scene, hold, q0, plan, scenario.directions_rad, t_rel)
         muscle_base = hold.activation
         if active:  # one command per sample, held over its substeps by the rollout
-            muscle_base = sample_commands(hold.activation, drawing.result())
+            muscle_base = sample_commands(hold.activation, drawing.result(), overwrite=True)
     who = TrialLabels(
         protocol=cfg.protocol_name,
         labels=tuple(

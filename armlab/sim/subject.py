@@ -50,12 +50,19 @@ def fluctuation(
         burn_in_periods=BURN_IN_PERIODS,
         name="subject.fluctuation_hz",
     )
-    return 1.0 + subject.trial_cv * eta[:, None, None] + subject.fluctuation_cv * eps
+    # 1 + trial_cv η + fluctuation_cv ε, computed in ε's own memory (the same sums and products)
+    np.multiply(eps, subject.fluctuation_cv, out=eps)
+    return np.add(eps, 1.0 + subject.trial_cv * eta[:, None, None], out=eps)
 
 
-def sample_commands(base: np.ndarray, rel: np.ndarray) -> np.ndarray:
-    """(n_trials, n_samples, n_muscles) commands in [0, 1] of every sample: ``base · rel`` clipped."""
-    return np.clip(np.asarray(base, float) * rel, 0.0, 1.0)
+def sample_commands(base: np.ndarray, rel: np.ndarray, *, overwrite: bool = False) -> np.ndarray:
+    """(n_trials, n_samples, n_muscles) commands in [0, 1] of every sample: ``base · rel`` clipped.
+
+    ``overwrite=True`` computes them in ``rel``'s memory (a caller done with ``rel``): the same
+    numbers, without a second array of the batch's size.
+    """
+    out = rel if overwrite else None
+    return np.clip(np.multiply(np.asarray(base, float), rel, out=out), 0.0, 1.0, out=out)
 
 
 def commands(base: np.ndarray, rel: np.ndarray, n_steps: int, substeps: int) -> np.ndarray:
