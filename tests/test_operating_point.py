@@ -77,6 +77,18 @@ def test_a_stiffness_that_follows_the_operating_angle_is_found_and_placed(tmp_pa
     assert op["binned"]["parameters"]["B"]["p_constant"] > 1e-3
 
 
+def test_the_time_varying_nominal_is_held_to_the_penalised_score_of_any_step(tmp_path):
+    # the same recording as above, with a penalised-score margin no step can meet: the scan still
+    # finds K varying, but the time-varying nominal is not accepted (the core's step rule,
+    # armlab.diagnosis.attribution.step_accepted), so the verdict does not name it
+    path = _recording(tmp_path, 3, 2.5, 0.0)
+    results, _ = run_diagnoser(path, "joint_1dof", DiagnosisConfig(bic_margin=1e12))
+    op = results["operating_point"]
+    assert op["binned"]["varying"][0] == "K" and op["delta_bic"] < 0
+    assert not op["varies"]
+    assert "operating_point_impedance" not in results["verdict"]
+
+
 @pytest.mark.parametrize("seed", [0, 1])
 def test_a_constant_impedance_on_a_moving_joint_is_not_called_time_varying(tmp_path, seed):
     path = _recording(tmp_path, seed, 0.0, 0.0)

@@ -36,9 +36,13 @@ from armlab.errors import ConfigError
 
 __all__ = [
     "Selection",
+    "delta_bic",
+    "effective_samples",
+    "explains_enough",
     "held_out_gap",
     "select_candidates",
     "select_effects",
+    "step_accepted",
 ]
 
 _INCOMPATIBLE = {"cuff_compliance": "transmission_compliance", "transmission_compliance": "cuff_compliance"}
@@ -96,6 +100,47 @@ def _separating_trial(a: str, b: str) -> str:
     return "a trial that excites the band where their predictions differ (see the 'where' breakdown)"
 
 
+def effective_samples(trials, band_share: float) -> float:
+    """``n_eff`` of the module docstring: the held-out samples times the scoring band's share of
+    the Nyquist band (at least 10)."""
+    n_h = sum(int(np.sum(tr.held)) for tr in trials)
+    return max(n_h * band_share, 10.0)
+
+
+def delta_bic(rss: float, rss_current: float, added_params: int, n_eff: float) -> float:
+    """``n_eff·ln(RSS / RSS_current) + Δp·ln(n_eff)``: negative where a model with ``added_params``
+    more parameters earns them on the held-out parts."""
+    return float(n_eff * np.log(rss / rss_current) + added_params * np.log(n_eff))
+
+
+def step_accepted(
+    rules: DiagnosisConfig, *, first: bool, excess0: float, floor: float, reduction: float, dbic: float
+) -> bool:
+    """Whether a greedy step is accepted (the module docstring's rule).
+
+    Args:
+        rules: the thresholds (tolerances set).
+        first: the first effect named over the nominal model (it must also explain
+            ``min_first_explained`` of the excess, so that a minor cause is not named alone).
+        excess0: the nominal model's gap above the floor; floor: the noise floor (gap fractions).
+        reduction: how far the step lowers the held-out gap; dbic: its :func:`delta_bic`.
+    """
+    return bool(
+        excess0 > rules.none_tolerance * floor  # a nominal within tolerance of the floor needs nothing
+        and dbic < -rules.bic_margin
+        and reduction >= rules.min_step_fraction * excess0
+        and reduction >= rules.min_floor_fraction * floor
+        and (not first or reduction >= rules.min_first_explained * excess0)
+    )
+
+
+def explains_enough(rules: DiagnosisConfig, *, left: float, excess0: float, floor: float) -> bool:
+    """Whether accepted effects that leave ``left`` above the floor explain the nominal excess
+    ``excess0`` (at most ``1 - min_explained`` of it left, or within ``none_tolerance`` of the
+    floor); if not, they are a partial explanation and the verdict is ``unknown``."""
+    return not left > max(rules.none_tolerance * floor, (1.0 - rules.min_explained) * excess0)
+
+
 def select_effects(
     trials,
     y_band,
@@ -106,6 +151,7 @@ def select_effects(
     *,
     band_share: float,
     family: ModelFamily,
+    nominal: FittedModel | None = None,
 ) -> Selection:
     """Greedy selection of up to ``rules.max_effects`` effects (see the module docstring).
 
@@ -119,17 +165,19 @@ def select_effects(
             ``none_tolerance``, ``indistinct_ratio``).
         band_share: (band width) / (Nyquist frequency) of the scoring band, for ``n_eff``.
         family: the protocol's model family.
+        nominal: the nominal model of ``family`` already fitted to these trials (a caller that
+            needed it first), or None to fit it here.
     """
     if rules.none_tolerance is None or rules.min_explained is None:
         raise ValueError(
             "select_effects needs none_tolerance and min_explained set (DiagnosisConfig.with_rules)"
         )
-    nominal = fit_model(trials, y_band, (), hp, family=family)
+    if nominal is None:
+        nominal = fit_model(trials, y_band, (), hp, family=family)
     stages = [nominal]
     gap0, _, _ = held_out_gap(nominal, trials, y_band)
     excess0 = max(gap0 - floor, 0.0)
-    n_h = sum(int(np.sum(tr.held)) for tr in trials)
-    n_eff = max(n_h * band_share, 10.0)
+    n_eff = effective_samples(trials, band_share)
     rankings: list[list[dict]] = []
     indistinct: list[dict] = []
     selected: list[Surrogate] = []
@@ -167,8 +215,8 @@ def select_effects(
                     fm = fits[name].result()
                     gap, rss, _ = held_out_gap(fm, trials, y_band)
                     dp = fm.n_params - current.n_params
-                    dbic = n_eff * np.log(rss / rss_c) + dp * np.log(n_eff)
-                    entries.append(_entry(name, gap_c, gap, float(dbic), dp, excess0, fm))
+                    dbic = delta_bic(rss, rss_c, dp, n_eff)
+                    entries.append(_entry(name, gap_c, gap, dbic, dp, excess0, fm))
                     progress.advance()
             except BaseException:  # an interrupt: the fits not started are dropped, not waited for
                 pool.shutdown(cancel_futures=True)
@@ -179,14 +227,9 @@ def select_effects(
         if best is None or best["model"] is None:
             break
         reduction = gap_c - best["held_out_gap"]
-        ok = (
-            excess0 > rules.none_tolerance * floor  # a nominal within tolerance of the floor needs nothing
-            and best["delta_bic"] < -rules.bic_margin
-            and reduction >= rules.min_step_fraction * excess0
-            and reduction >= rules.min_floor_fraction * floor
-            and (step > 0 or reduction >= rules.min_first_explained * excess0)
-        )
-        if not ok:
+        if not step_accepted(
+            rules, first=step == 0, excess0=excess0, floor=floor, reduction=reduction, dbic=best["delta_bic"]
+        ):
             break
         for other in entries[1:]:
             red_o = gap_c - other["held_out_gap"]
@@ -205,7 +248,7 @@ def select_effects(
     if selected:
         verdict = [s.name for s in selected]
         left = held_out_gap(current, trials, y_band)[0] - floor
-        if left > max(rules.none_tolerance * floor, (1.0 - rules.min_explained) * excess0):
+        if not explains_enough(rules, left=left, excess0=excess0, floor=floor):
             partial, verdict = verdict, ["unknown"]
     else:
         verdict = ["none"] if gap0 - floor <= rules.none_tolerance * floor else ["unknown"]

@@ -12,7 +12,15 @@ from dataclasses import asdict
 import numpy as np
 
 from armlab.config.diagnosis import DiagnosisConfig
-from armlab.diagnosis.attribution import held_out_gap, select_candidates, select_effects
+from armlab.diagnosis.attribution import (
+    delta_bic,
+    effective_samples,
+    explains_enough,
+    held_out_gap,
+    select_candidates,
+    select_effects,
+    step_accepted,
+)
 from armlab.diagnosis.families import FittedModel, fit_model
 from armlab.diagnosis.localise import band_breakdown, frf_parameters, residual_tests, window_breakdown
 from armlab.dsp import zero_phase
@@ -118,23 +126,28 @@ _OP_EFFECT = "operating_point_impedance"
 
 def _operating_point(
     trials, y_band, hp, floor: float, cfg: DiagnosisConfig, band_share: float
-) -> tuple[dict, FittedModel]:
+) -> tuple[dict, FittedModel, FittedModel]:
     """Whether the impedance varies with the operating angle, where and how much, and how far a
     time-varying nominal shrinks the gap (:mod:`.time_varying`; docs/diagnosis_schema.md); and the
-    stationary nominal fitted for it."""
+    stationary and time-varying nominals fitted for it.
+
+    The time-varying nominal is judged over the stationary one by the core's rule for a step
+    (:func:`~armlab.diagnosis.attribution.step_accepted`: penalised score, share of the excess,
+    share of the floor), where the binned scan has found a parameter that varies. It is not held
+    to the first-effect share (``min_first_explained``), which keeps a minor cause from being named
+    alone: the scan's per-bin fits are the independent evidence that the impedance varies, and the
+    effects it leaves unexplained are then selected, and judged, from the time-varying nominal."""
     stationary = fit_model(trials, y_band, (), hp, family=JOINT_FAMILY)
     sign = _torque_sign(stationary)
     scan = scan_operating_point(trials, y_band, hp, band_share=band_share, sign=sign)
     tv = fit_model(trials, y_band, (), hp, family=JOINT_TV_FAMILY)
-    gap_s = held_out_gap(stationary, trials, y_band)[0]
-    gap_tv = held_out_gap(tv, trials, y_band)[0]
+    gap_s, rss_s, _ = held_out_gap(stationary, trials, y_band)
+    gap_tv, rss_tv, _ = held_out_gap(tv, trials, y_band)
     excess = max(gap_s - floor, 0.0)
     shrink = gap_s - gap_tv
-    varies = bool(
-        scan.varying
-        and excess > cfg.none_tolerance * floor
-        and shrink >= cfg.min_step_fraction * excess
-        and shrink >= cfg.min_floor_fraction * floor
+    dbic = delta_bic(rss_tv, rss_s, tv.n_params - stationary.n_params, effective_samples(trials, band_share))
+    varies = bool(scan.varying) and step_accepted(
+        cfg, first=False, excess0=excess, floor=floor, reduction=shrink, dbic=dbic
     )
     # K(p), B(p) of the time-varying nominal over the bins' range (trial-mean coefficients)
     beta = np.mean(np.asarray(tv.beta, float), axis=0) * sign
@@ -164,11 +177,12 @@ def _operating_point(
         "stationary_nominal_gap": gap_s,
         "time_varying_nominal_gap": gap_tv,
         "explained_fraction": shrink / excess if excess > 0 else 0.0,
+        "delta_bic": dbic,
         "reference_rad": trials[0].op_ref,
         "coefficients": coef,
         "curves": {"operating_angle_rad": grid.tolist(), **curves},
     }
-    return summary, stationary
+    return summary, stationary, tv
 
 
 def _check_rate(names: list[str], fs_fit: float, fs_raw: float) -> None:
@@ -196,9 +210,9 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
     names = candidate_names(cfg)
     _check_rate(names, fs, records[0].fs_hz)
     band_share = (cfg.band_hz - cfg.highpass_hz) / (0.5 * fs)
-    varying, stationary = None, None
+    varying, stationary, tv_nominal = None, None, None
     if all(tr.op is not None for tr in trials):  # a time-varying recording
-        varying, stationary = _operating_point(trials, y_band, hp, floor, cfg, band_share)
+        varying, stationary, tv_nominal = _operating_point(trials, y_band, hp, floor, cfg, band_share)
     tv = varying is not None and varying["varies"]
     sel = select_effects(
         trials,
@@ -209,6 +223,7 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
         cfg,
         band_share=band_share,
         family=JOINT_TV_FAMILY if tv else JOINT_FAMILY,
+        nominal=tv_nominal if tv else stationary,
     )
     # with a time-varying nominal, the stationary one is the first stage and the time-varying one
     # the stage that adds operating_point_impedance
@@ -232,7 +247,7 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
         accepted = sel.partial or [n for n in sel.verdict if n not in ("none", "unknown")]
         excess = max(stages[0]["held_out_gap"] - floor, 0.0)
         left = stages[-1]["held_out_gap"] - floor
-        explained = left <= max(cfg.none_tolerance * floor, (1.0 - cfg.min_explained) * excess)
+        explained = explains_enough(cfg, left=left, excess0=excess, floor=floor)
         verdict = [_OP_EFFECT, *accepted] if explained else [_OP_EFFECT, *accepted, "unknown"]
         partial = [] if explained else [_OP_EFFECT, *accepted]
     results = {
