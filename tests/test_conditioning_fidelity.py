@@ -114,3 +114,28 @@ def test_ideal_subject_is_one_switch_away():
     cfg = compose(["protocol=conditioning_window", "subject.enabled=false"])[1]
     assert default.active and cfg.subject == replace(default, enabled=False)  # nothing else moves
     assert not cfg.subject.active
+
+
+@pytest.mark.slow
+def test_thresholds_hold_on_the_median_over_ten_seeds():
+    # the calibration was made on seed 0; on seeds 0-9 (nothing tuned on 1-9) each full-model
+    # threshold's median is within the same +-20 ms of the paper's and the reduced model's median
+    # lead is >= 30 ms (docs/reproduction/conditioning_window.md has the per-seed table). A seed
+    # whose criterion is never met counts as later than every window (the median then moves up).
+    never = np.inf
+    firsts = {key: [] for key in ("K_pd_from_s", "symmetric_from_s", "constant_from_s")}
+    leads = []
+    for seed in range(10):
+        cfg = compose(["protocol=conditioning_window", f"seed={seed}"])[1]
+        crit = hooks.simulate(cfg).estimate()[0]["criteria"]
+        for key in firsts:
+            firsts[key].append(never if crit["full"][key] is None else crit["full"][key])
+        leads.append(crit["full"]["K_pd_from_s"] - crit["reduced"]["K_pd_from_s"])
+    for key, paper_key in (
+        ("K_pd_from_s", "K_pd_after_s"),
+        ("symmetric_from_s", "symmetric_after_s"),
+        ("constant_from_s", "constant_after_s"),
+    ):
+        median = float(np.median(firsts[key]))
+        assert abs(median - PAPER_THRESHOLDS_S[paper_key]) <= THRESHOLD_TOL_S + 1e-9, (key, firsts[key])
+    assert float(np.median(leads)) >= REDUCED_LEAD_S - 1e-9, leads
