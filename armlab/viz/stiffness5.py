@@ -47,8 +47,10 @@ def format_stiffness5_table(results: Mapping[str, Any]) -> str:
         worst = int(np.argmax(inr["xi_relative_error"]))
         lines.append(
             f"inertial trials ({inr['n_configurations']} configurations): xi_red largest relative error "
-            f"{100 * inr['xi_relative_error'][worst]:.3g} % ({inr['names'][worst]}); gravity torque on "
-            f"{inr['n_held_out']} held-out configurations {inr['gravity_rms_Nm']:.3g} N m RMS"
+            f"{100 * inr['xi_relative_error'][worst]:.3g} % ({inr['names'][worst]}; m_total, c_x, c_y "
+            f"also absorb the base sensor's offset), of the arm's first moments u, s "
+            f"{100 * inr['arm_xi_max_relative_error']:.3g} %; gravity torque on {inr['n_held_out']} "
+            f"held-out configurations {inr['gravity_rms_Nm']:.3g} N m RMS"
         )
     inputs = results.get("stiffness_inputs")
     if inputs:
