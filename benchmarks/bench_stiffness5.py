@@ -1,7 +1,7 @@
 """Benchmark of the 5-DoF stiffness protocol (seed paper 001; issue 19; run by `make bench`).
 
-The paper-scale run (8 pre-load conditions x 50 disturbances, realistic sensors) as a user starts
-it, ``armlab run protocol=stiffness_5dof_emg out=<tmp>`` in a fresh Python process, with every
+The paper-scale run (the default stages: 30 s of kinematic calibration, 40 inertial holds, 8 pre-load
+conditions x 50 disturbances; realistic sensors) as a user starts it, ``armlab run protocol=stiffness_5dof_emg out=<tmp>`` in a fresh Python process, with every
 output (trial file, results, figures, recording): its wall time, start-up and imports included,
 against issue 19's budget of 60 s on the 2-core machine. Prints::
 

@@ -1,5 +1,11 @@
 """Loading and composing the MJCF models, analytic arm kinematics, and ground truth."""
 
+from armlab.models.arm5_free import (
+    FREE_SERVO_KP,
+    FREE_SERVO_KV,
+    Arm5FreeScene,
+    build_arm5_free_scene,
+)
 from armlab.models.arm5_scene import (
     ARM5_LAB_TIMESTEP_S,
     ROBOT_BASE_POS_M,
@@ -203,6 +209,10 @@ __all__ = [
     "polynomial_in_new_frame",
     "rotation",
     "ARM5_LAB_TIMESTEP_S",
+    "FREE_SERVO_KP",
+    "FREE_SERVO_KV",
+    "Arm5FreeScene",
+    "build_arm5_free_scene",
     "ROBOT_BASE_POS_M",
     "ROBOT_KP",
     "ROBOT_KV",

@@ -9,6 +9,14 @@ from armlab.sim.arm5_force_task import (
     muscle_torque_matrix,
     preload_conditions,
 )
+from armlab.sim.arm5_free import (
+    FREE_CHUNK_STEPS,
+    FreeMotionRecord,
+    HoldRecord,
+    random_joint_motion,
+    simulate_free_motion,
+    simulate_holds,
+)
 from armlab.sim.arm5_measure import (
     MARKER_RATE_HZ,
     MeasuredTrials,
@@ -100,6 +108,12 @@ __all__ = [
     "simulate_level_c",
     "simulate_level_a",
     "A_MIN",
+    "FREE_CHUNK_STEPS",
+    "FreeMotionRecord",
+    "HoldRecord",
+    "random_joint_motion",
+    "simulate_free_motion",
+    "simulate_holds",
     "PRELOAD_CONDITIONS",
     "ForceTask",
     "force_task_activations",

@@ -1,8 +1,10 @@
-"""Table and figures of the 5-DoF stiffness protocol (seeds/001, stiffness stage).
+"""Table and figures of the 5-DoF stiffness protocol (seeds/001: calibration, inertial, stiffness).
 
-- :func:`format_stiffness5_table`: per pre-load condition the relative error of K̂_q against the
-  truth, its smallest eigenvalue, the ellipsoid's major-axis error and its angle to the pre-load;
-  then spec 001's acceptance checks with their tolerances.
+- :func:`format_stiffness5_table`: the calibration stage's centre errors and IK RMS, the inertial
+  stage's xi_red errors and held-out gravity RMS (when they ran), which chain and xi_red the
+  stiffness stage used; per pre-load condition the relative error of K̂_q against the truth, its
+  smallest eigenvalue, the ellipsoid's major-axis error and its angle to the pre-load; then spec
+  001's acceptance checks with their tolerances.
 - :func:`plot_stiffness5_figures`: ``kq_per_condition.png`` (the 15 unique entries of K_q per
   condition: estimate with the least-squares standard error against the truth) and
   ``ellipsoids_xz.png`` (the Fig. 3 stiffness ellipsoids projected on the X-Z plane, at each
@@ -32,7 +34,28 @@ def format_stiffness5_table(results: Mapping[str, Any]) -> str:
     if not rows:
         raise DataError("results hold no condition to tabulate")
     truth = results.get("truth", "intrinsic")
-    lines = [
+    lines = []
+    cal, inr = results.get("calibration"), results.get("inertial")
+    if cal:
+        lines.append(
+            f"kinematic calibration ({cal['n_frames']} marker frames, {cal['n_held_out']} held out): "
+            f"shoulder {1e3 * cal['shoulder_error_m']:.3f} mm, elbow {1e3 * cal['elbow_error_m']:.3f} mm, "
+            f"wrist offset {1e3 * cal['wrist_offset_error_m']:.3f} mm from the truth; IK on the held-out "
+            f"motion {cal['ik_rms_deg']:.3g} deg RMS"
+        )
+    if inr:
+        worst = int(np.argmax(inr["xi_relative_error"]))
+        lines.append(
+            f"inertial trials ({inr['n_configurations']} configurations): xi_red largest relative error "
+            f"{100 * inr['xi_relative_error'][worst]:.3g} % ({inr['names'][worst]}; m_total, c_x, c_y "
+            f"also absorb the base sensor's offset), of the arm's first moments u, s "
+            f"{100 * inr['arm_xi_max_relative_error']:.3g} %; gravity torque on {inr['n_held_out']} "
+            f"held-out configurations {inr['gravity_rms_Nm']:.3g} N m RMS"
+        )
+    inputs = results.get("stiffness_inputs")
+    if inputs:
+        lines.append(f"stiffness stage used: chain {inputs['chain']}; xi_red {inputs['xi_red']}")
+    lines += [
         f"K_q per condition ({results.get('sensor_preset', '?')} sensors; truth: {truth})",
         "  condition  trials  |K-K_true|/|K_true|  lambda_min  major axis err  to pre-load (est / true)",
     ]

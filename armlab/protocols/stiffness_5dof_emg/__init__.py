@@ -3,29 +3,36 @@
 The seated arm (three shoulder hinges, elbow flexion, pronation/supination) holds a displayed
 force (8 pre-load conditions) while the LWR, welded to its wrist through a 6-D cuff, applies
 quintic joint-space disturbances; the wrist JR3 and the forearm marker cluster give K_q per
-condition by Eqs. (10), (14)-(17), drawn as the Fig. 3 stiffness ellipsoids. Only the stiffness
-stage is built (``stages``); calibration, inertial and EMG stages come later.
+condition by Eqs. (10), (14)-(17), drawn as the Fig. 3 stiffness ellipsoids. Before them the
+kinematic calibration (random motion, joint centres by Eqs. (7)-(9)) gives the chain and the
+inertial trials (40 held configurations, Eq. (22)) give xi_red, which the stiffness estimate uses
+(``stages``); the EMG stage comes later.
 """
 
 from armlab.protocols.base import Protocol
 from armlab.protocols.stiffness_5dof_emg import hooks, preflight
 from armlab.protocols.stiffness_5dof_emg.config import (
+    CalibrationConfig,
     EstimationConfig,
+    InertialConfig,
     Stiffness5dofConfig,
     TrialsConfig,
 )
 
 __all__ = [
     "PROTOCOL",
+    "CalibrationConfig",
     "EstimationConfig",
+    "InertialConfig",
     "Stiffness5dofConfig",
     "TrialsConfig",
 ]
 
 PROTOCOL = Protocol(
     name="stiffness_5dof_emg",
-    paper="seeds/001: 5-DoF limb stiffness by joint-space perturbations, SPD estimate, EMG (stiffness stage)",
-    summary="seated 5-DoF arm, LWR + 6-D cuff, 8 pre-loads x 50 quintic disturbances; SPD K_q, ellipsoids",
+    paper="seeds/001: 5-DoF limb stiffness by joint-space perturbations, SPD estimate, EMG (stages 1-3)",
+    summary="seated 5-DoF arm: calibration, 40 inertial holds, LWR + 6-D cuff, 8 pre-loads x 50 "
+    "quintic disturbances; SPD K_q, ellipsoids",
     schema=Stiffness5dofConfig,
     groups={"sensors": "realistic"},
     simulate=hooks.simulate,
@@ -38,6 +45,7 @@ PROTOCOL = Protocol(
     catalogue=("reflex",),
     examples=(
         "run protocol=stiffness_5dof_emg sensors=ideal",
+        "run protocol=stiffness_5dof_emg stages=[stiffness]",
         "run protocol=stiffness_5dof_emg reflex.enabled=true",
         "run protocol=stiffness_5dof_emg trials.n_per_condition=20 trials.conditions=[Z-10,Z+10]",
         "estimate outputs/stiffness_5dof_emg/<run> estimation.post_interval_s=[0.25,0.4]",

@@ -1,10 +1,12 @@
 """The typed experiment of ``stiffness_5dof_emg`` (seeds/001): the groups it reads, nothing else.
 
 ``stages`` picks the paper's protocol stages (Sec. 3): kinematic calibration, inertial trials,
-stiffness trials, EMG maps. Only the stiffness stage is built; asking for another is refused with
-the list of what exists. ``trials`` sets how the stiffness trials are drawn and simulated,
-``estimation`` how they are reduced to K_q (the group ``armlab estimate`` takes). Defaults are the
-paper's numbers or, where it is silent, spec 001's assumptions (each named beside its field).
+stiffness trials, EMG maps. Calibration, inertial and stiffness are built (the EMG stage is refused
+with the list of what exists); the stiffness stage is always among them (its trials are the run's
+trial file). ``calibration`` and ``inertial`` set those stages' motion and holds, ``trials`` how the
+stiffness trials are drawn and simulated, ``estimation`` how they are reduced to K_q (the group
+``armlab estimate`` takes). Defaults are the paper's numbers or, where it is silent, spec 001's
+assumptions (each named beside its field).
 """
 
 from __future__ import annotations
@@ -19,7 +21,9 @@ from armlab.sim.arm5_force_task import A_MIN, PRELOAD_CONDITIONS
 __all__ = [
     "BUILT_STAGES",
     "STAGES",
+    "CalibrationConfig",
     "EstimationConfig",
+    "InertialConfig",
     "Stage",
     "Stiffness5dofConfig",
     "TrialsConfig",
@@ -29,12 +33,78 @@ __all__ = [
 Stage = Literal["calibration", "inertial", "stiffness", "emg"]
 STAGES: tuple[str, ...] = get_args(Stage)
 #: The stages this package simulates today (the others come with later slices of issue 19).
-BUILT_STAGES: tuple[str, ...] = ("stiffness",)
+BUILT_STAGES: tuple[str, ...] = ("calibration", "inertial", "stiffness")
 
 if TYPE_CHECKING:
     StageName = Stage
 else:  # OmegaConf 2.3 rejects Literal field types: it reads these as str, __post_init__ checks them
     StageName = str
+
+
+@dataclass(kw_only=True)
+class CalibrationConfig:
+    """The kinematic calibration (paper Sec. 2.1, 3: random motion of every joint, Eqs. (7)-(10))."""
+
+    # s of random motion recorded (the paper gives none; spec 001 assumption: 30 s at 500 Hz)
+    duration_s: float = 30.0
+    # rad, the largest excursion of each joint from the default posture (assumption: a sum of three
+    # slow sines within q0 +- 0.5 rad, inside every joint range of models/arm_5dof)
+    amplitude_rad: float = 0.5
+    # the last part of the record kept out of the joint-centre fit, on which the IK of the
+    # calibrated chain is checked (spec 001 check 2; the split is an assumption)
+    holdout_fraction: float = 0.2
+
+    def __post_init__(self) -> None:
+        check(
+            2.0 <= self.duration_s <= 600.0,
+            f"calibration.duration_s must lie in [2, 600] s (the spec: 30), got {self.duration_s}",
+        )
+        check(
+            0.05 <= self.amplitude_rad <= 0.6,
+            f"calibration.amplitude_rad must lie in [0.05, 0.6] rad (q0 +- it stays inside every joint "
+            f"range), got {self.amplitude_rad}",
+        )
+        check(
+            0.05 <= self.holdout_fraction <= 0.5,
+            f"calibration.holdout_fraction must lie in [0.05, 0.5], got {self.holdout_fraction}",
+        )
+
+
+@dataclass(kw_only=True)
+class InertialConfig:
+    """The inertial trials (paper Sec. 3, 4.1: predefined configurations held, Eq. (22))."""
+
+    # configurations held for the regression (paper Sec. 3: "data (40 trials)")
+    n_configurations: int = 40
+    # configurations not simulated, on which the fitted G(q) is checked (spec 001 check 4: 10)
+    n_held_out: int = 10
+    # rad, each joint of a configuration drawn uniformly in q0 +- spread (the paper's predefined
+    # configurations are not given; assumption: inside every joint range of models/arm_5dof)
+    spread_rad: float = 0.7
+    # s each configuration is held and averaged (spec 001 design: 1 s)
+    hold_s: float = 1.0
+    # s the servos settle at a configuration before its hold (assumption: the paper keeps samples
+    # with velocity below a threshold; after 1 s the base wrench is still to 1e-5 N, measured)
+    settle_s: float = 1.0
+
+    def __post_init__(self) -> None:
+        check(
+            isinstance(self.n_configurations, int) and self.n_configurations >= 9,
+            f"inertial.n_configurations must be an integer >= 9 (xi_red has 9 entries), got "
+            f"{self.n_configurations!r}",
+        )
+        check(
+            isinstance(self.n_held_out, int) and self.n_held_out >= 1,
+            f"inertial.n_held_out must be an integer >= 1, got {self.n_held_out!r}",
+        )
+        check(
+            0.05 <= self.spread_rad <= 0.7,
+            f"inertial.spread_rad must lie in [0.05, 0.7] rad (q0 +- it stays inside every joint range), "
+            f"got {self.spread_rad}",
+        )
+        for name in ("hold_s", "settle_s"):
+            value = getattr(self, name)
+            check(0.0 < value <= 10.0, f"inertial.{name} must lie in (0, 10] s, got {value}")
 
 
 @dataclass(kw_only=True)
@@ -115,8 +185,11 @@ class Stiffness5dofConfig(ExperimentConfig):
     """The seated 5-DoF arm perturbed by the LWR through a 6-D cuff (seeds/001)."""
 
     protocol_name: str = "stiffness_5dof_emg"
-    # the stages to run, in the paper's order (Sec. 3); only BUILT_STAGES exist today
-    stages: list[str] = field(default_factory=lambda: ["stiffness"])
+    # the stages to run (paper Sec. 3; run in the paper's order); only BUILT_STAGES exist today.
+    # Without calibration the stiffness stage uses the true chain, without inertial the true xi_red
+    stages: list[str] = field(default_factory=lambda: list(BUILT_STAGES))
+    calibration: CalibrationConfig = field(default_factory=CalibrationConfig)
+    inertial: InertialConfig = field(default_factory=InertialConfig)
     trials: TrialsConfig = field(default_factory=TrialsConfig)
     estimation: EstimationConfig = field(default_factory=EstimationConfig)
     # the stretch reflex (armlab.sim.arm5_reflex): the conditioning lab's law, gains and latencies
@@ -134,3 +207,10 @@ class Stiffness5dofConfig(ExperimentConfig):
                 f"stage {stage!r} of the paper's protocol is not built yet; the stages that exist: "
                 f"{list(BUILT_STAGES)} (of the paper's {list(STAGES)})",
             )
+        check(len(set(self.stages)) == len(self.stages), f"stages repeats a stage: {list(self.stages)}")
+        check(
+            "stiffness" in self.stages,
+            f"stages={list(self.stages)} lacks 'stiffness': the stiffness trials are the run's trial "
+            f"file, the calibration and inertial stages feed them; valid: a subset of "
+            f"{list(BUILT_STAGES)} containing 'stiffness'",
+        )

@@ -1,4 +1,14 @@
-"""The stiffness stage of seed paper 001 simulated into a :class:`~armlab.data.trial.TrialSet`.
+"""The stages of seed paper 001 simulated into a :class:`~armlab.data.trial.TrialSet`.
+
+:func:`simulate_stages` runs the stages of ``cfg.stages`` in the paper's order: the kinematic
+calibration (:mod:`.calibration`) and the inertial trials (:mod:`.inertial`) in the robot-free
+scene (:mod:`armlab.models.arm5_free`), stored as ``attrs['calibration']`` and
+``attrs['inertial']``, and the stiffness trials (:func:`simulate_stiffness_stage`), whose channels
+are the trial file's. Each stage draws from its own generator (seeded ``seed`` for the stiffness
+trials, as before the other stages existed; ``[seed, 1]`` and ``[seed, 2]`` for calibration and
+inertial), so adding or leaving out a stage changes no other stage's data.
+
+The stiffness stage:
 
 Per pre-load condition the force task's least-effort activations (:mod:`armlab.sim.arm5_force_task`)
 hold the default posture while the subject pushes the displayed force; the robot then applies the
@@ -14,17 +24,20 @@ times being samples ``step - 1 + k step`` with ``step = fs_hz / marker_fs_hz`` (
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
 from armlab.data.trial import TrialSet
 from armlab.estimation.stiffness_trials import WristSensorGeometry
+from armlab.models.arm5_free import build_arm5_free_scene
 from armlab.models.arm5_scene import Arm5Scene, build_arm5_scene
 from armlab.models.arm5_truth import analytic_damping, analytic_stiffness, inertial_truth
 from armlab.models.arm_5dof import Arm5Dof, limb_kinematics, load_arm_5dof
 from armlab.models.limb_kinematics import LimbKinematics
+from armlab.protocols.stiffness_5dof_emg.calibration import simulate_calibration
 from armlab.protocols.stiffness_5dof_emg.config import Stiffness5dofConfig
+from armlab.protocols.stiffness_5dof_emg.inertial import simulate_inertial
 from armlab.sensors.presets import Arm5SensorSuite
 from armlab.sim.arm5_force_task import PRELOAD_CONDITIONS, force_task_activations
 from armlab.sim.arm5_measure import MARKER_RATE_HZ, measure_stiffness_record
@@ -40,6 +53,7 @@ __all__ = [
     "StiffnessLab",
     "build_lab",
     "hold_markers",
+    "simulate_stages",
     "simulate_stiffness_stage",
 ]
 
@@ -78,6 +92,28 @@ def hold_markers(frames: np.ndarray, step: int, n_samples: int) -> np.ndarray:
     return frames[:, np.minimum(idx, frames.shape[1] - 1)]
 
 
+def _suite(cfg: Stiffness5dofConfig) -> Arm5SensorSuite:
+    return Arm5SensorSuite.ideal() if cfg.sensors.preset == "ideal" else Arm5SensorSuite.realistic()
+
+
+def simulate_stages(cfg: Stiffness5dofConfig, lab: StiffnessLab | None = None) -> TrialSet:
+    """Every stage of ``cfg.stages`` (module docstring): the stiffness trials with
+    ``attrs['calibration']`` / ``attrs['inertial']`` added for the earlier stages that ran."""
+    lab = lab or build_lab()
+    trials = simulate_stiffness_stage(cfg, lab)
+    extra = {}
+    if "calibration" in cfg.stages or "inertial" in cfg.stages:
+        free = build_arm5_free_scene()
+        suite = _suite(cfg)
+        if "calibration" in cfg.stages:
+            rng = np.random.default_rng([cfg.seed, 1])
+            extra["calibration"] = simulate_calibration(cfg.calibration, lab.arm, free, suite, rng)
+        if "inertial" in cfg.stages:
+            rng = np.random.default_rng([cfg.seed, 2])
+            extra["inertial"] = simulate_inertial(cfg.inertial, lab.arm, free, suite, rng)
+    return replace(trials, attrs={**trials.attrs, **extra}) if extra else trials
+
+
 def simulate_stiffness_stage(cfg: Stiffness5dofConfig, lab: StiffnessLab | None = None) -> TrialSet:
     """The stiffness trials of every condition in ``cfg.trials.conditions``, measured.
 
@@ -105,7 +141,7 @@ def simulate_stiffness_stage(cfg: Stiffness5dofConfig, lab: StiffnessLab | None 
     record = simulate_stiffness_trials(
         scene, kin, arm.q0, acts, plan, timing, tc.amplitude_rad, settle_s=cfg.sim.settle_s, reflex=cfg.reflex
     )
-    suite = Arm5SensorSuite.ideal() if cfg.sensors.preset == "ideal" else Arm5SensorSuite.realistic()
+    suite = _suite(cfg)
     meas = measure_stiffness_record(record, suite, rng, t0_s=plan.wait_s)
     n_samples = record.channels["true_q"].shape[1]
     step = int(round(record.fs_hz / MARKER_RATE_HZ))
@@ -162,7 +198,8 @@ def simulate_stiffness_stage(cfg: Stiffness5dofConfig, lab: StiffnessLab | None 
             "K_reflex_Nm_per_rad": K_reflex,
             "K_effective_Nm_per_rad": K_int + K_reflex,
             "D_intrinsic_Nms_per_rad": analytic_damping(arm, acts),
-            # the inertial stage is not built: its result, xi_red, is taken from the truth
+            # the true identifiable combinations (Eq. (22)); the stiffness stage uses them when the
+            # inertial stage did not run
             "xi_red": inertial_truth(arm).xi_red,
         },
     }

@@ -10,7 +10,7 @@ from armlab.models.arm_5dof import limb_kinematics, load_arm_5dof
 from armlab.protocols._files import write_new
 from armlab.protocols.base import OutputContext, Simulated
 from armlab.protocols.stiffness_5dof_emg.config import EstimationConfig, Stiffness5dofConfig
-from armlab.protocols.stiffness_5dof_emg.experiment import build_lab, simulate_stiffness_stage
+from armlab.protocols.stiffness_5dof_emg.experiment import build_lab, simulate_stages
 from armlab.protocols.stiffness_5dof_emg.results import estimate_stiffness
 
 __all__ = ["RECORDING_HZ", "format_table", "outputs", "recording_series", "reestimate", "simulate"]
@@ -19,9 +19,9 @@ RECORDING_HZ = 100.0  # Hz, the rate the recording draws the skeleton and wrench
 
 
 def simulate(cfg: Stiffness5dofConfig) -> Simulated:
-    """Simulate the stiffness stage; estimation runs when the runner asks for it."""
+    """Simulate the chosen stages; estimation runs when the runner asks for it."""
     lab = build_lab()
-    trials = simulate_stiffness_stage(cfg, lab)
+    trials = simulate_stages(cfg, lab)
     return Simulated(trials, lab.scene.xml, {}, lambda: estimate_stiffness(trials, cfg.estimation))
 
 

@@ -1,11 +1,15 @@
-"""The stiffness stage's estimation and its acceptance checks (seed paper 001; spec 001 checks 5,
-6, 9), from a :class:`~armlab.data.trial.TrialSet` written by :mod:`.experiment` alone.
+"""The run's estimation and its acceptance checks (seed paper 001; spec 001 checks 1, 2, 4, 5, 6,
+9), from a :class:`~armlab.data.trial.TrialSet` written by :mod:`.experiment` alone.
 
-Per condition: the forearm cluster's frames (every ``fs_hz / marker_fs_hz``-th sample: the frames
-the Vicon delivered), the wrist JR3, Eq. (10)'s inverse kinematics on the true chain (the
-kinematic-calibration stage is not built), G(q) from ``attrs.ground_truth.xi_red`` (the inertial
-stage is not built), Eqs. (14)-(17) (:func:`armlab.estimation.condition_stiffness`), the Fig. 3
-ellipsoids, and the errors against the intrinsic truth.
+The stages feed each other as in the paper (Sec. 2): the kinematic calibration
+(:mod:`.calibration`, ``attrs['calibration']``) gives the chain, the inertial trials
+(:mod:`.inertial`, ``attrs['inertial']``) fit xi_red with that chain, and the stiffness stage uses
+both. A stage left out of the run is replaced by the truth (the true chain, the true xi_red), and
+``results['stiffness_inputs']`` says which was used. Per condition: the forearm cluster's frames
+(every ``fs_hz / marker_fs_hz``-th sample: the frames the Vicon delivered), the wrist JR3, Eq. (10)'s
+inverse kinematics and J_limb on the chain, G(q) from xi_red, Eqs. (14)-(17)
+(:func:`armlab.estimation.condition_stiffness`), the Fig. 3 ellipsoids, and the errors against the
+truth (the true ellipsoid on the true chain).
 """
 
 from __future__ import annotations
@@ -19,7 +23,9 @@ from armlab.estimation.stiffness_ellipsoid import axis_angle_deg, ellipsoid_surf
 from armlab.estimation.stiffness_trials import WristSensorGeometry, condition_stiffness
 from armlab.models.arm5_truth import gravity_stiffness
 from armlab.models.arm_5dof import limb_kinematics, load_arm_5dof
+from armlab.protocols.stiffness_5dof_emg.calibration import estimate_calibration
 from armlab.protocols.stiffness_5dof_emg.config import EstimationConfig
+from armlab.protocols.stiffness_5dof_emg.inertial import estimate_inertial
 from armlab.sim.arm5_trials import directions
 
 __all__ = [
@@ -70,7 +76,7 @@ def estimate_stiffness(trials: TrialSet, est: EstimationConfig) -> tuple[dict, d
         ``surface_true`` (n_c, 16, 32, 3) N, and ``recording`` (what the trial recording draws).
     """
     arm = load_arm_5dof()
-    kin = limb_kinematics(arm)
+    true_kin = limb_kinematics(arm)
     truth = _attr(trials, "ground_truth")
     names = [str(n) for n in _attr(trials, "condition_names")]
     forces = np.asarray(_attr(trials, "condition_forces_N"), float)
@@ -79,7 +85,7 @@ def estimate_stiffness(trials: TrialSet, est: EstimationConfig) -> tuple[dict, d
     # the truth a static estimate measures: intrinsic with activations frozen, intrinsic + the
     # static reflex with the reflex on (spec 001 check 7: "the bias reported against the effective truth")
     K_true = np.asarray(truth["K_effective_Nm_per_rad"], float) if reflex_on else K_int
-    xi = np.asarray(truth["xi_red"], float)
+    xi_true = np.asarray(truth["xi_red"], float)
     q0 = np.asarray(_attr(trials, "q0_rad"), float)
     preset = str(_attr(trials, "sensor_preset"))
     geo = WristSensorGeometry(
@@ -93,6 +99,24 @@ def estimate_stiffness(trials: TrialSet, est: EstimationConfig) -> tuple[dict, d
         np.asarray(_attr(trials, "marker_to_wrist_rot"), float),
         np.asarray(_attr(trials, "marker_to_wrist_m"), float),
     )
+    stage_results, stage_checks = {}, []
+    kin, xi = true_kin, xi_true
+    inputs = {
+        "chain": "true (the calibration stage did not run)",
+        "xi_red": "true (the inertial stage did not run)",
+    }
+    if "calibration" in trials.attrs:
+        cal = estimate_calibration(trials.attrs["calibration"], true_kin, offset, q0, preset)
+        kin = cal.kin
+        stage_results["calibration"] = cal.results
+        inputs["chain"] = "estimated (calibration stage, Eqs. (7)-(9))"
+        stage_checks += cal.checks
+    if "inertial" in trials.attrs:
+        inr = estimate_inertial(trials.attrs["inertial"], kin, offset, xi_true, preset)
+        xi = inr.xi_red
+        stage_results["inertial"] = inr.results
+        inputs["xi_red"] = "estimated (inertial stage, Eq. (22))"
+        stage_checks += inr.checks
     fs = trials.fs_hz
     step = int(round(fs / float(_attr(trials, "marker_fs_hz"))))
     onset = int(np.asarray(trials.onset_index)[0])
@@ -133,7 +157,7 @@ def estimate_stiffness(trials: TrialSet, est: EstimationConfig) -> tuple[dict, d
         shift = r.uncompensated.K_ls - r.estimate.K_ls
         e_hat = stiffness_ellipsoid(k, r.J_work, centre=forces[c], radius=est.ellipsoid_radius_m)
         e_true = stiffness_ellipsoid(
-            K_true[c], kin.jacobian(q0), centre=forces[c], radius=est.ellipsoid_radius_m
+            K_true[c], true_kin.jacobian(q0), centre=forces[c], radius=est.ellipsoid_radius_m
         )
         err = relative_error(k, K_true[c])
         axis_err = float(axis_angle_deg(e_hat.major_axis, e_true.major_axis))
@@ -199,27 +223,33 @@ def estimate_stiffness(trials: TrialSet, est: EstimationConfig) -> tuple[dict, d
         ]
     else:
         checks = [check5]
-    checks += [
-        {
-            "check": 6,
-            "what": "ignoring G shifts K_ls by dG/dq (relative error of the shift)",
-            "value": max(r["gravity_shift_rel_error"] for r in rows),
-            "tolerance": CHECK_TOLERANCES["check6"],
-            "passed": all(r["gravity_shift_rel_error"] < CHECK_TOLERANCES["check6"] for r in rows),
-        },
-        {
-            "check": 9,
-            "what": "ellipsoid major axis within 10 deg of the truth in every condition (deg)",
-            "value": max(r["major_axis_error_deg"] for r in rows),
-            "tolerance": CHECK_TOLERANCES["check9_deg"],
-            "passed": all(r["major_axis_error_deg"] < CHECK_TOLERANCES["check9_deg"] for r in rows),
-        },
-    ]
+    checks = (
+        stage_checks
+        + checks
+        + [
+            {
+                "check": 6,
+                "what": "ignoring G shifts K_ls by dG/dq (relative error of the shift)",
+                "value": max(r["gravity_shift_rel_error"] for r in rows),
+                "tolerance": CHECK_TOLERANCES["check6"],
+                "passed": all(r["gravity_shift_rel_error"] < CHECK_TOLERANCES["check6"] for r in rows),
+            },
+            {
+                "check": 9,
+                "what": "ellipsoid major axis within 10 deg of the truth in every condition (deg)",
+                "value": max(r["major_axis_error_deg"] for r in rows),
+                "tolerance": CHECK_TOLERANCES["check9_deg"],
+                "passed": all(r["major_axis_error_deg"] < CHECK_TOLERANCES["check9_deg"] for r in rows),
+            },
+        ]
+    )
     results = {
         "protocol": str(_attr(trials, "protocol")),
         "stages": [str(s) for s in _attr(trials, "stages")],
         "sensor_preset": preset,
         "n_trials": trials.n_trials,
+        "stiffness_inputs": inputs,
+        **stage_results,
         "conditions": rows,
         "checks": checks,
         "reflex": reflex_on,
