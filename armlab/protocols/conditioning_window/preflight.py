@@ -118,7 +118,9 @@ def validate(cfg: ConditioningWindowConfig) -> None:
     the perturbation's acceleration and on a reflex that cannot act inside any observation window."""
     scenario = load_scenario(cfg.scenario.name).subset(cfg.scenario.k_values, cfg.scenario.n_trials)
     fs = cfg.sensors.fs_hz
-    check_rate(fs, float(scenario.t_k_s.min()))
+    # the shortest quintic: T_k itself, or one segment of a designed multi-segment waveform
+    segments = 1 if scenario.waveform is None else len(scenario.waveform.knots)
+    check_rate(fs, float(scenario.t_k_s.min()) / segments)
     n_samples = int(round(scenario.record_s * fs))
     onset = int(round(scenario.pre_onset_record_s * fs))
     if cfg.sensors.preset == "realistic":
