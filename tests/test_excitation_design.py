@@ -3,6 +3,8 @@ cases, the designer's limits and determinism, and the designed scenario through 
 
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 import pytest
 
@@ -12,6 +14,7 @@ from armlab.perturbations.scenario import load_scenario
 from armlab.perturbations.segments import SegmentWaveform
 from armlab.protocols.conditioning_window.config import ConditioningWindowConfig
 from armlab.protocols.conditioning_window.design import (
+    MIN_FRACTION,
     PAPER_PEAK_ACC_RAD_S2,
     PAPER_PEAK_VEL_RAD_S,
     DesignConfig,
@@ -19,6 +22,7 @@ from armlab.protocols.conditioning_window.design import (
     planned_estimate,
     planning_model,
 )
+from armlab.protocols.conditioning_window.design_limits import robot_limits
 
 DIRS = np.asarray(PAPER_DIRECTIONS, float)
 
@@ -38,6 +42,17 @@ def test_segments_bound_and_peaks():
     np.testing.assert_allclose([np.abs(xd).max(), np.abs(xdd).max()], [vel, acc], rtol=1e-6)
     with pytest.raises(ConfigError, match=r"\[-1, 1\]"):
         SegmentWaveform(knots=(1.5,))
+    with pytest.raises(ConfigError, match=r"\(0, 1\]"):
+        SegmentWaveform(knots=(1.0,), fraction=0.0)
+
+
+def test_fraction_holds_the_paper_quintic():
+    """T_obs = T_k + 70 ms: the one-segment waveform over fraction T_k / T_obs is Eq. (16) over T_k
+    (exact up to the round-off of fraction * duration)."""
+    t = np.linspace(-0.01, 0.4, 4101)
+    w = SegmentWaveform(knots=(1.0,), fraction=0.23 / 0.30).evaluate(t, 0.30)
+    for a, b in zip(w, quintic_profile(t, 0.23), strict=True):
+        np.testing.assert_allclose(a, b, rtol=1e-12, atol=1e-9)
 
 
 def test_scenario_refuses_bad_profile_and_loads_designed():
@@ -54,8 +69,6 @@ def model():
 def test_rigid_planning_recovers_the_nominal_parameters(model):
     """With the cuff rigid the planned data are Eq. (9) evaluated on the nominal parameters, so the
     least squares returns them exactly (round-off only)."""
-    from dataclasses import replace
-
     rigid = replace(model, cuff_stiffness_N_per_m=np.inf)
     zeta, *_ = planned_estimate(rigid, SegmentWaveform(knots=(1.0,)), DIRS, 0.12, 0.05)
     np.testing.assert_allclose(zeta, rigid.theta, rtol=1e-8, atol=1e-10)
@@ -69,13 +82,42 @@ def test_cuff_planning_reproduces_the_labs_negative_stiffness(model):
     assert -2 * 268 < zeta[7] < -268 / 2
 
 
+def test_planning_model_predicts_the_labs_quintic_at_370ms(model):
+    """The lab's paper quintic at T_obs = 370 ms (T_k = 300 ms), seeds 0-4 (docs/excitation_design.md):
+    K 15-41 %, D 51-67 %, xi 18-47 % from the intrinsic truth. The planning model (linear arm + cuff,
+    no reflex) with the noise measured over 120 ms cannot plan a 370 ms window: it refuses; over
+    370 ms its bias must fall inside those seed ranges widened by 10 points (its noise term is
+    the seeds' spread, the reflex it lacks)."""
+    with pytest.raises(ConfigError, match="longer than the measured noise"):
+        planned_estimate(model, SegmentWaveform(knots=(1.0,)), DIRS, 0.37, 0.30)
+    noiseless = replace(model, noise=None)
+    zeta, *_ = planned_estimate(noiseless, SegmentWaveform(knots=(1.0,)), DIRS, 0.37, 0.30)
+    th = model.theta
+    err = {
+        n: np.linalg.norm(zeta[b] - th[b]) / np.linalg.norm(th[b])
+        for n, b in (("xi", slice(0, 3)), ("D", slice(3, 7)), ("K", slice(7, 11)))
+    }
+    assert 0.05 <= err["K"] <= 0.51 and 0.41 <= err["D"] <= 0.77 and 0.08 <= err["xi"] <= 0.57, err
+
+
 def test_design_respects_limits_and_is_deterministic(model):
-    cfg = DesignConfig(t_obs_s=0.2, n_segments=3, criterion="d_optimal", n_starts=2, max_iter=50)
+    cfg = DesignConfig(t_obs_s=0.12, n_segments=3, criterion="d_optimal", n_starts=2, max_iter=50)
     a, b = design_excitation(model, cfg), design_excitation(model, cfg)
     assert a.waveform == b.waveform
-    assert a.peak_vel_rad_s <= PAPER_PEAK_VEL_RAD_S * (1 + 1e-9)
-    assert a.peak_acc_rad_s2 <= PAPER_PEAK_ACC_RAD_S2 * (1 + 1e-9)
+    assert a.waveform.knots[-1] == 1.0 and MIN_FRACTION <= a.waveform.fraction <= 1.0  # ending "hold"
+    assert a.peak_vel_rad_s <= 0.95 * PAPER_PEAK_VEL_RAD_S * (1 + 1e-9)  # limit_margin 0.95
+    assert a.peak_acc_rad_s2 <= 0.95 * PAPER_PEAK_ACC_RAD_S2 * (1 + 1e-9)
     assert np.abs(a.directions_rad).max() <= 0.05 and max(abs(k) for k in a.waveform.knots) <= 1.0
+
+
+def test_robot_limits_refuse_a_too_fast_waveform():
+    """Full-amplitude reversals every 10 ms would ask the LWR for ~9x its A1/A2 velocity limit."""
+    cfg = ConditioningWindowConfig()
+    scen = load_scenario("designed_window")
+    robot_limits(cfg, scen).check("designed_window")  # the committed design is within every limit
+    fast = replace(scen, waveform=SegmentWaveform(knots=(1.0, -1.0, 1.0, -1.0)), t_k_s=np.array([0.04]))
+    with pytest.raises(ConfigError, match=r"A2 velocity .* > 1\.92 rad/s"):
+        robot_limits(cfg, fast).check("fast")
 
 
 def test_design_config_refuses_bad_values():
@@ -83,3 +125,5 @@ def test_design_config_refuses_bad_values():
         DesignConfig(criterion="a_optimal")
     with pytest.raises(ConfigError, match="0.05"):
         DesignConfig(amplitude_rad=0.1)
+    with pytest.raises(ConfigError, match="hold"):
+        DesignConfig(ending="return")

@@ -143,7 +143,10 @@ def load_scenario(name: str) -> Scenario:
     waveform = None
     if profile == "segments":  # a designed chain of quintics (armlab.perturbations.segments)
         try:
-            waveform = SegmentWaveform(knots=tuple(float(v) for v in _need(raw, "knots", path)))
+            waveform = SegmentWaveform(
+                knots=tuple(float(v) for v in _need(raw, "knots", path)),
+                fraction=float(raw.get("active_fraction", 1.0)),
+            )
         except (TypeError, ValueError) as err:
             raise ConfigError(f"{path.name}: knots must be a list of numbers in [-1, 1] ({err})") from None
     directions = np.asarray(_need(raw, "directions_rad", path), float)

@@ -5,7 +5,9 @@ A waveform is a chain of the conditioning paper's point-to-point quintics, Eq. (
 acceleration at every knot, and holds the last knot after ``T``. Because each segment is monotone
 between its knots, |w(t)| <= max |knots| everywhere, so a direction of per-joint amplitude A never
 displaces a joint by more than A (the paper's 0.05 rad bound, section IV-B, holds by construction).
-The paper's own quintic is the one-segment waveform ``knots = (1,)``.
+The waveform may run over only a ``fraction`` of the duration it is given and hold after: the
+paper's own quintic with its 70 ms of hold (T_obs = T_k + 70 ms) is the one-segment waveform
+``knots = (1,)``, ``fraction = T_k / T_obs``.
 """
 
 from __future__ import annotations
@@ -37,9 +39,11 @@ class SegmentWaveform:
     Attributes:
         knots: (m,) values reached at the ends of the m equal segments (the start is 0), each in
             [-1, 1]; the last one is held after the waveform ends.
+        fraction: the part of the given duration the segments fill, in (0, 1]; then the hold.
     """
 
     knots: tuple[float, ...]
+    fraction: float = 1.0
 
     def __post_init__(self) -> None:
         k = np.asarray(self.knots, float)
@@ -47,6 +51,10 @@ class SegmentWaveform:
             raise ConfigError(
                 f"waveform knots must be 1 to n finite values in [-1, 1] (normalised displacement), "
                 f"got {self.knots!r}"
+            )
+        if not (np.isfinite(self.fraction) and 0 < self.fraction <= 1):
+            raise ConfigError(
+                f"waveform fraction must lie in (0, 1] (of the duration), got {self.fraction!r}"
             )
 
     @property
@@ -59,7 +67,8 @@ class SegmentWaveform:
         """w, w', w'' at times ``t`` (s from the onset) for a waveform lasting ``duration`` s.
 
         Each segment is Eq. (16) of the conditioning paper from one knot to the next over
-        ``duration / m``; before 0 the waveform is 0, after ``duration`` the last knot.
+        ``fraction * duration / m``; before 0 the waveform is 0, after ``fraction * duration`` the
+        last knot.
 
         Returns:
             ``(w, wd, wdd)`` shaped like ``t``: 1, 1/s, 1/s².
@@ -69,7 +78,7 @@ class SegmentWaveform:
         t = np.asarray(t, float)
         knots = np.asarray(self.knots, float)
         steps = np.diff(np.concatenate([[0.0], knots]))  # (m,)
-        seg = duration / knots.size
+        seg = self.fraction * duration / knots.size
         starts = np.arange(knots.size) * seg
         # every segment's quintic is held at 0 before and 1 after it: their weighted sum is w
         s, sd, sdd = quintic_profile(t[..., None] - starts, seg)
@@ -77,6 +86,6 @@ class SegmentWaveform:
 
     def peaks(self, duration: float) -> tuple[float, float]:
         """Peak |w'| (1/s) and |w''| (1/s²) over the waveform, exactly (segments do not overlap)."""
-        seg = duration / len(self.knots)
+        seg = self.fraction * duration / len(self.knots)
         step = float(np.max(np.abs(np.diff(np.concatenate([[0.0], self.knots])))))
         return QUINTIC_PEAK_VEL * step / seg, QUINTIC_PEAK_ACC * step / seg**2

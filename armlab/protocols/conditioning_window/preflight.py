@@ -120,8 +120,8 @@ def validate(cfg: ConditioningWindowConfig) -> None:
     scenario = load_scenario(cfg.scenario.name).subset(cfg.scenario.k_values, cfg.scenario.n_trials)
     fs = cfg.sensors.fs_hz
     # the shortest quintic: T_k itself, or one segment of a designed multi-segment waveform
-    segments = 1 if scenario.waveform is None else len(scenario.waveform.knots)
-    check_rate(fs, float(scenario.t_k_s.min()) / segments)
+    w = scenario.waveform
+    check_rate(fs, float(scenario.t_k_s.min()) * (1.0 if w is None else w.fraction / len(w.knots)))
     if scenario.waveform is not None:  # a designed waveform: the LWR's limits after IK (issue 23)
         robot_limits(cfg, scenario).check(f"scenario {scenario.name!r}")
     n_samples = int(round(scenario.record_s * fs))
