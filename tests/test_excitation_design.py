@@ -19,10 +19,12 @@ from armlab.protocols.conditioning_window.design import (
     PAPER_PEAK_VEL_RAD_S,
     DesignConfig,
     design_excitation,
-    planned_estimate,
     planning_model,
+    register_design_config,
 )
-from armlab.protocols.conditioning_window.design_limits import robot_limits
+from armlab.protocols.conditioning_window.design_limits import LWR_TORQUE_LIMIT_NM, robot_limits
+from armlab.protocols.conditioning_window.excitation_comparison import run_excitation
+from armlab.protocols.conditioning_window.planning import planned_estimate
 
 DIRS = np.asarray(PAPER_DIRECTIONS, float)
 
@@ -120,6 +122,19 @@ def test_robot_limits_refuse_a_too_fast_waveform():
         robot_limits(cfg, fast).check("fast")
 
 
+def test_hydra_composes_the_design_config():
+    from hydra import compose, initialize
+    from omegaconf import OmegaConf
+
+    register_design_config()
+    register_design_config()  # idempotent
+    with initialize(version_base="1.3", config_path=None):
+        cfg = OmegaConf.to_object(compose(config_name="design_config", overrides=["criterion=d_optimal"]))
+        assert isinstance(cfg, DesignConfig) and cfg.criterion == "d_optimal" and cfg.t_obs_s == 0.12
+        with pytest.raises(ConfigError, match="design.n_segments must lie in 1..12, got 20"):
+            OmegaConf.to_object(compose(config_name="design_config", overrides=["n_segments=20"]))
+
+
 def test_design_config_refuses_bad_values():
     with pytest.raises(ConfigError, match="d_optimal"):
         DesignConfig(criterion="a_optimal")
@@ -127,3 +142,17 @@ def test_design_config_refuses_bad_values():
         DesignConfig(amplitude_rad=0.1)
     with pytest.raises(ConfigError, match="hold"):
         DesignConfig(ending="return")
+
+
+def test_designed_window_in_the_lab_seed0():
+    """The committed design in the default realistic lab, seed 0 (docs/excitation_design.md):
+    K positive definite from 300 ms and quasi-constant from 340 ms, pinned within one window
+    step of the designed scenario's grid (20 ms there; 340 -> 370 ms is its next step); the
+    intrinsic-truth K error at 120 ms stays above 10x (measured 13.5x: the soft cuff's bias, which
+    is deterministic; the seeds' spread is 13.1-14.0x), and the robot's torques stay within limits."""
+    r = run_excitation(ConditioningWindowConfig(seed=0), "designed_window")
+    assert 0.28 - 1e-9 <= r["criteria"]["K_pd_from_s"] <= 0.32 + 1e-9
+    assert 0.32 - 1e-9 <= r["criteria"]["constant_from_s"] <= 0.37 + 1e-9
+    i = r["t_obs_s"].index(0.12)
+    assert r["K_rel_err"][i] > 10.0
+    assert np.all(np.array(r["robot_tau_peak_Nm"]) < LWR_TORQUE_LIMIT_NM)
