@@ -58,19 +58,27 @@ class PlanningModel:
         return np.concatenate([self.xi, self.D.ravel(), self.K.ravel()])
 
 
-def _plant_step(model: PlanningModel) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Zero-order-hold discretisation at fs of arm (M(q0), D, K) behind the cuff, input the
-    commanded [q_r, qd_r]; output the cuff torque at the joints, ``K_c (q_r - q) + D_c (qd_r - qd)``."""
+def _plant_step(model: PlanningModel) -> tuple[np.ndarray, ...]:
+    """First-order-hold discretisation at fs (Franklin & Powell) of the arm (M(q0), D, K) behind the
+    cuff, input the commanded [q_r, qd_r] (linear between samples: a zero-order hold would delay it
+    by half a sample, which through a stiff cuff is a torque error of K_c qd / (2 fs)); output the
+    cuff torque at the joints, ``K_c (q_r - q) + D_c (qd_r - qd)``.
+
+    Returns:
+        ``(Phi, G1, G2, C, Dd)``: ``x[k+1] = Phi x[k] + G1 u[k] + G2 (u[k+1] - u[k])``,
+        ``tau[k] = C x[k] + Dd u[k]``.
+    """
     J = planar_arm.jacobian(model.q0, model.l1, model.l2)
     Kc = model.cuff_stiffness_N_per_m * J.T @ J
     Dc = model.cuff_damping_Ns_per_m * J.T @ J
     Mi = np.linalg.inv(planar_arm.mass_matrix(model.q0, model.xi))
     A = np.block([[np.zeros((2, 2)), np.eye(2)], [-Mi @ (model.K + Kc), -Mi @ (model.D + Dc)]])
     B = np.block([[np.zeros((2, 4))], [Mi @ Kc, Mi @ Dc]])
-    aug = np.zeros((8, 8))
-    aug[:4, :4], aug[:4, 4:] = A, B
-    E = expm(aug / model.fs_hz)
-    return E[:4, :4], E[:4, 4:], np.hstack([-Kc, -Dc]), np.hstack([Kc, Dc])
+    dt = 1.0 / model.fs_hz
+    aug = np.zeros((12, 12))
+    aug[:4, :4], aug[:4, 4:8], aug[4:8, 8:] = A * dt, B * dt, np.eye(4)
+    E = expm(aug)
+    return E[:4, :4], E[:4, 4:8], E[:4, 8:], np.hstack([-Kc, -Dc]), np.hstack([Kc, Dc])
 
 
 def planned_signals(
@@ -106,14 +114,15 @@ def planned_signals(
 def _response_matrix(model: PlanningModel, n: int) -> np.ndarray:
     """(n * 2, n * 4): ``tau`` (sample-major) of the discretised plant from its input
     ``[q_r, qd_r]`` (sample-major), i.e. the block lower-triangular Toeplitz matrix of its impulse
-    response ``h[0] = D_d``, ``h[k] = C A_d^(k-1) B_d`` (cached per model and n)."""
+    response under the first-order hold, ``h[0] = Dd + C G2``,
+    ``h[k] = C Phi^(k-1) (G1 - G2) + C Phi^k G2`` (cached per model and n)."""
     key = (id(model), n)
     if key not in _RESPONSE_CACHE:
-        Ad, Bd, C, Dd = _plant_step(model)
+        Phi, G1, G2, C, Dd = _plant_step(model)
         h = np.empty((n, 2, 4))
-        h[0], x = Dd, Bd
+        h[0], xa, xb = Dd + C @ G2, G1 - G2, Phi @ G2
         for k in range(1, n):
-            h[k], x = C @ x, Ad @ x
+            h[k], xa, xb = C @ (xa + xb), Phi @ xa, Phi @ xb
         lag = np.arange(n)[:, None] - np.arange(n)[None, :]  # t - s
         G = np.where((lag >= 0)[:, :, None, None], h[np.clip(lag, 0, None)], 0.0)  # (t, s, 2, 4)
         _RESPONSE_CACHE.clear()  # one model at a time: a design evaluates one n thousands of times
