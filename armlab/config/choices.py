@@ -14,6 +14,9 @@ __all__ = [
     "ArmModel",
     "CableMode",
     "CapstanModel",
+    "DesignCriterion",
+    "DesignEnding",
+    "DesignNoise",
     "EffectLevel",
     "ElbowImpedance",
     "ElbowModel",
@@ -50,3 +53,6 @@ PayloadLabel = Literal["M1", "M2", "M3", "M4", "M5"]  # vfs.payloads, Table I
 
 # effects.py
 EffectLevel = Literal["model", "controller", "sensor"]  # Effect.LEVEL
+DesignCriterion = Literal["d_optimal", "e_optimal", "expected_error"]  # design.criterion (issue 23)
+DesignNoise = Literal["measured", "sensor"]  # design.noise
+DesignEnding = Literal["hold", "free"]  # design.ending

@@ -39,6 +39,7 @@ from armlab.perturbations.reference_paths import (
     spiral_path,
     table_3_3_path,
 )
+from armlab.perturbations.segments import QUINTIC_PEAK_ACC, QUINTIC_PEAK_VEL, SegmentWaveform
 from armlab.perturbations.sum_of_sines import SumOfSines, sum_of_sines
 
 __all__ = [
@@ -77,4 +78,7 @@ __all__ = [
     "spiral_path",
     "table_3_3_path",
     "Shape",
+    "QUINTIC_PEAK_ACC",
+    "QUINTIC_PEAK_VEL",
+    "SegmentWaveform",
 ]

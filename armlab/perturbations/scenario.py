@@ -13,6 +13,7 @@ import numpy as np
 import yaml
 
 from armlab.errors import ConfigError
+from armlab.perturbations.segments import SegmentWaveform
 
 __all__ = [
     "SCENARIO_DIR",
@@ -40,6 +41,8 @@ class Scenario:
         wait_s: (lo, hi) s, uniform random wait before onset.
         pre_onset_record_s, post_window_record_s: s, recorded margins.
         extension_t_obs_s: s, extra observation windows on the longest-T_k trials.
+        waveform: the designed multi-segment waveform (``profile: segments``, issue 23) every
+            direction follows over T_k; None: the paper's quintic, Eq. (16).
     """
 
     name: str
@@ -53,6 +56,7 @@ class Scenario:
     pre_onset_record_s: float
     post_window_record_s: float
     extension_t_obs_s: tuple[float, ...] = ()
+    waveform: SegmentWaveform | None = None
 
     @property
     def record_s(self) -> float:
@@ -88,6 +92,7 @@ class Scenario:
             pre_onset_record_s=self.pre_onset_record_s,
             post_window_record_s=self.post_window_record_s,
             extension_t_obs_s=self.extension_t_obs_s,
+            waveform=self.waveform,
         )
 
 
@@ -132,8 +137,18 @@ def load_scenario(name: str) -> Scenario:
     if not path.is_file():
         raise ConfigError(f"unknown scenario {name!r}; available: {available_scenarios()}")
     raw = yaml.safe_load(path.read_text()) or {}
-    if _need(raw, "profile", path) != "quintic":
-        raise ConfigError(f"{path.name}: profile {raw['profile']!r} unknown; valid: ['quintic']")
+    profile = _need(raw, "profile", path)
+    if profile not in ("quintic", "segments"):
+        raise ConfigError(f"{path.name}: profile {profile!r} unknown; valid: ['quintic', 'segments']")
+    waveform = None
+    if profile == "segments":  # a designed chain of quintics (armlab.perturbations.segments)
+        try:
+            waveform = SegmentWaveform(
+                knots=tuple(float(v) for v in _need(raw, "knots", path)),
+                fraction=float(raw.get("active_fraction", 1.0)),
+            )
+        except (TypeError, ValueError) as err:
+            raise ConfigError(f"{path.name}: knots must be a list of numbers in [-1, 1] ({err})") from None
     directions = np.asarray(_need(raw, "directions_rad", path), float)
     if directions.ndim != 2 or directions.shape[1] != 2 or not np.all(np.isfinite(directions)):
         raise ConfigError(f"{path.name}: directions_rad must be a list of [dq1, dq2] pairs in rad")
@@ -160,6 +175,7 @@ def load_scenario(name: str) -> Scenario:
         pre_onset_record_s=float(_need(raw, "pre_onset_record_s", path)),
         post_window_record_s=float(_need(raw, "post_window_record_s", path)),
         extension_t_obs_s=tuple(float(t) for t in raw.get("extension_t_obs_s", [])),
+        waveform=waveform,
     )
     if any(t <= 0 for t in scen.extension_t_obs_s):
         raise ConfigError(f"{path.name}: extension_t_obs_s must be positive times in s")

@@ -24,6 +24,7 @@ from armlab.models.robot_fk import RobotKinematics
 from armlab.models.scene import MUSCLES, ROBOT_POINTS, Scene, build_scene
 from armlab.perturbations.quintic import quintic_profile
 from armlab.perturbations.scenario import Scenario, TrialPlan
+from armlab.perturbations.segments import SegmentWaveform
 from armlab.sensors.channel import ChannelSpec, apply_channel
 from armlab.sensors.presets import SensorSuite, measure
 from armlab.sim import _chunk_kernel
@@ -132,7 +133,13 @@ def load_compiled() -> None:
 
 
 def robot_target_paths(
-    scene: Scene, hold: HoldState, q0: np.ndarray, plan: TrialPlan, directions: np.ndarray, t_rel: np.ndarray
+    scene: Scene,
+    hold: HoldState,
+    q0: np.ndarray,
+    plan: TrialPlan,
+    directions: np.ndarray,
+    t_rel: np.ndarray,
+    waveform: SegmentWaveform | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Robot joint targets at every physics step, once per (direction, T_k) pair of the plan.
 
@@ -144,11 +151,13 @@ def robot_target_paths(
 
     Args:
         t_rel: (n_steps,) s, time of each physics step relative to the onset.
+        waveform: a designed multi-segment s(t) (its range may leave [0, 1]: the path is solved
+            over that range); None: the paper's quintic.
 
     Returns:
         ``paths`` (n_pairs, n_steps, 7) rad and ``pair_of`` (n_trials,) the pair of each trial.
     """
-    s_grid = np.linspace(0.0, 1.0, PATH_POINTS)
+    s_grid = np.linspace(*((0.0, 1.0) if waveform is None else waveform.s_range), PATH_POINTS)
     splines = []
     for dq_f in directions:
         path = hand_world(scene, q0 + s_grid[:, None] * dq_f)
@@ -160,7 +169,8 @@ def robot_target_paths(
     )
     table = np.empty((len(pairs), t_rel.size, 7))
     for j, (direction, t_k) in enumerate(pairs):
-        s, _, _ = quintic_profile(t_rel, float(t_k))
+        profile = quintic_profile if waveform is None else waveform.evaluate
+        s, _, _ = profile(t_rel, float(t_k))
         table[j] = splines[int(direction)](s)
     return table, np.asarray(which).reshape(-1)
 
@@ -220,7 +230,9 @@ def record_trials(
         # step clock; the perturbation starts at sample `onset`, so at (onset + 1) / fs
         t_rel = (np.arange(n_steps) + 1) * dt - (onset + 1) / fs
         q0 = np.asarray(cfg.arm.q0, float)
-        paths, path_of = robot_target_paths(scene, hold, q0, plan, scenario.directions_rad, t_rel)
+        paths, path_of = robot_target_paths(
+            scene, hold, q0, plan, scenario.directions_rad, t_rel, scenario.waveform
+        )
         muscle_base = hold.activation
         if active:  # one command per sample, held over its substeps by the rollout
             muscle_base = sample_commands(hold.activation, drawing.result(), overwrite=True)

@@ -19,6 +19,7 @@ from armlab.viz.diagnosis import (
     diagnosis_figures,
     diagnosis_recording,
 )
+from armlab.viz.excitation import plot_excitation_comparison
 from armlab.viz.figures import (
     plot_error_vs_window,
     plot_validation,
@@ -44,6 +45,7 @@ from armlab.viz.vfs import format_vfs_tables, plot_vfs_figures, write_vfs_record
 __all__ = [
     "DEFAULT_SCALAR_CHANNELS",
     "plot_ci_window_sweep",
+    "plot_excitation_comparison",
     "preload_rerun",
     "plot_error_vs_window",
     "plot_validation",

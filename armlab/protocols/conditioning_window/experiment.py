@@ -58,7 +58,8 @@ class WindowSpec:
 
 
 def window_specs(scenario: Scenario, estimator: EstimatorConfig) -> list[WindowSpec]:
-    """The paper's windows (T_obs = T_k + 70 ms) plus the scenario's extension windows.
+    """The paper's windows (T_obs = T_k + 70 ms) plus the scenario's extension windows, in order
+    of T_obs (a designed scenario's extension windows may be shorter than its T_k + extra).
 
     With ``estimator.t_obs_s`` set, those windows are used on the longest-T_k group instead.
     """
@@ -76,9 +77,9 @@ def window_specs(scenario: Scenario, estimator: EstimatorConfig) -> list[WindowS
     specs += [
         WindowSpec(k=last.k, t_k_s=last.t_k_s, t_obs_s=float(t), extension=True)
         for t in scenario.extension_t_obs_s
-        if t > last.t_obs_s
+        if t > last.t_obs_s or (t < last.t_obs_s and len(specs) == 1)
     ]
-    return specs
+    return sorted(specs, key=lambda s: s.t_obs_s)
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)

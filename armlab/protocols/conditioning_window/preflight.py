@@ -19,6 +19,7 @@ from armlab.config.schema import EstimatorConfig
 from armlab.errors import ArmlabWarning, ConfigError
 from armlab.perturbations.scenario import load_scenario
 from armlab.protocols.conditioning_window.config import ConditioningWindowConfig
+from armlab.protocols.conditioning_window.design_limits import robot_limits
 from armlab.protocols.conditioning_window.experiment import check_window_lengths, window_specs
 from armlab.sensors.channel import ChannelSpec
 from armlab.sensors.presets import SensorSuite
@@ -118,7 +119,11 @@ def validate(cfg: ConditioningWindowConfig) -> None:
     the perturbation's acceleration and on a reflex that cannot act inside any observation window."""
     scenario = load_scenario(cfg.scenario.name).subset(cfg.scenario.k_values, cfg.scenario.n_trials)
     fs = cfg.sensors.fs_hz
-    check_rate(fs, float(scenario.t_k_s.min()))
+    # the shortest quintic: T_k itself, or one segment of a designed multi-segment waveform
+    w = scenario.waveform
+    check_rate(fs, float(scenario.t_k_s.min()) * (1.0 if w is None else w.fraction / len(w.knots)))
+    if scenario.waveform is not None:  # a designed waveform: the LWR's limits after IK (issue 23)
+        robot_limits(cfg, scenario).check(f"scenario {scenario.name!r}")
     n_samples = int(round(scenario.record_s * fs))
     onset = int(round(scenario.pre_onset_record_s * fs))
     if cfg.sensors.preset == "realistic":
