@@ -34,20 +34,16 @@ import numpy as np
 from armlab.dsp import butterworth, lowpass_zero_phase, zero_phase
 from armlab.errors import DataError, EstimationError
 from armlab.estimation.sqrt_damping_fit import fit_sqrt_damping_field
+from armlab.models.cartesian_field import quadratic_basis
 
 __all__ = [
     "AXES",
-    "COMPLIANCE_BASIS_HZ",
     "CartSet",
     "load_cart_trials",
     "prepare_cart",
 ]
 
 AXES = ("x", "y")
-#: Hz, low-pass of the measured force from which the cuff-compliance basis (the cuff's stretch
-#: per unit compliance) is built: the triangles' content lies below it, and a basis built from the
-#: band-limited force would carry the output's own noise and "explain" it.
-COMPLIANCE_BASIS_HZ = 20.0
 _REQUIRED = ("hand_pos", "ref_pos", "hand_force")
 _DIFF_MEDIAN_CHI2 = 0.4549364  # median of a χ² variable with one degree of freedom
 _MAX_HAND_POS_M = 2.0  # m, the thesis's workspace lies within 1.2 m of its origin (Table 3.3)
@@ -135,7 +131,10 @@ class CartSet:
         q, p, v, a: (m, n, 2) measured hand position m, perturbation ``q - q_ref`` m, velocity
             m/s, acceleration m/s² (central differences), unfiltered.
         force: (m, n, 2) N, measured force, unfiltered.
-        u: (m, n, 2) N, the force low-passed at :data:`COMPLIANCE_BASIS_HZ` (cuff basis).
+        u: (m, n, 2) N, the nominal field's force at the measured states, ``K̂₀(q)·p + δ₀√K̂₀(q)·v``
+            (the cuff-compliance basis: a cuff stretches by ``F/k``, to first order by the
+            nominal prediction's; built from the measured force instead, the basis would carry
+            the output's own noise and "explain" it).
         t: (m, n) s, time of each sample from the first trial's start (drift basis).
         valid: (m, n) bool, logged samples (the padding of shorter trials excluded).
         stop: (m,) int, the sequence (stop) of each trial, 0.. in time order.
@@ -229,6 +228,13 @@ def _phase_labels(p: np.ndarray, valid: np.ndarray) -> np.ndarray:
     return np.array(out)
 
 
+def _nominal_force(q: np.ndarray, p: np.ndarray, v: np.ndarray, fits) -> np.ndarray:
+    """(m, n, 2) N: the fitted field's force ``K(q)·p + δ√K(q)·v`` at the measured states."""
+    k = np.stack([quadratic_basis(q) @ f.k for f in fits], axis=-1)
+    root = np.sqrt(np.maximum(k, 0.0))
+    return k * p + np.array([f.delta for f in fits]) * root * v
+
+
 def prepare_cart(trials, *, band_hz: float) -> CartSet:
     """The scoring set of a ``cartesian_online`` trial file (module docstring).
 
@@ -298,7 +304,7 @@ def prepare_cart(trials, *, band_hz: float) -> CartSet:
         v=v,
         a=a,
         force=force,
-        u=lowpass_zero_phase(force, fs, COMPLIANCE_BASIS_HZ, 4, axis=1, padtype="even"),
+        u=_nominal_force(q, p, v, fits),
         t=(t0 - t0.min())[:, None] + np.arange(n)[None, :] / fs,
         valid=valid,
         stop=stop,
