@@ -295,7 +295,8 @@ def prepare_cart(trials, *, band_hz: float) -> CartSet:
     d2 = np.diff(np.where(valid[..., None], force, np.nan), 2, axis=1)
     d2 = d2[np.all(np.isfinite(d2), axis=-1)]
     noise_var = np.median(d2**2, axis=0) / (6.0 * _DIFF_MEDIAN_CHI2)
-    names = tuple(f"seq {s} {ph}" for s, ph in zip(stop, _phase_labels(p, valid), strict=True))
+    phase = _phase_labels(p, valid)
+    names = tuple(f"seq {s} {ph}" for s, ph in zip(stop, phase, strict=True))
     return CartSet(
         fs_hz=fs,
         band_hz=float(band_hz),
@@ -308,7 +309,7 @@ def prepare_cart(trials, *, band_hz: float) -> CartSet:
         t=(t0 - t0.min())[:, None] + np.arange(n)[None, :] / fs,
         valid=valid,
         stop=stop,
-        phase=_phase_labels(p, valid),
+        phase=phase,
         held_trials=held_trials,
         centre=centre,
         radius=radius,

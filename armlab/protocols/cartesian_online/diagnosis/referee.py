@@ -22,6 +22,11 @@ noise of ``referee.force_noise_N`` per axis. The hidden effects, at log-uniform 
   second-order Taylor expansion at that stop: for a cubic the dropped term is ``ε·K(c)·r(d)`` of
   the 8 mm excursion ``d``, (8 mm / 0.1 m)³ = 5e-4 of the effect.
 
+Beside ``none`` and the five single effects: two pairs (the hand's inertia with an F/T offset; a
+compliant cuff with a non-quadratic field, both physical effects in one simulation) and a
+left-out class (a heavy hand with ``payload_mass`` excluded from the candidates: the right answer
+is ``unknown``).
+
 Only ``hand_pos``, ``ref_pos``, ``hand_force`` and the trial_meta ``case``, ``stop``, ``n_logged``,
 ``t_start_s`` are written: the diagnoser never sees the truth.
 
@@ -67,10 +72,14 @@ _MAGNITUDES = {
     "non_quadratic_field": {"relative_amplitude": (0.002, 0.1)},
 }
 
-#: Class name -> (hidden effects, candidates excluded from the diagnosis).
+#: Class name -> (hidden effects, candidates excluded from the diagnosis). New classes go last:
+#: a dataset's random stream is keyed by its class's index.
 CART_CLASSES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "none": ((), ()),
     **{name: ((name,), ()) for name in _MAGNITUDES},
+    "payload_mass+force_sensor_drift": (("payload_mass", "force_sensor_drift"), ()),
+    "cuff_compliance+non_quadratic_field": (("cuff_compliance", "non_quadratic_field"), ()),
+    "left_out:payload_mass": (("payload_mass",), ("payload_mass",)),
 }
 
 
@@ -181,22 +190,22 @@ def make_cart_dataset(
     stops = np.unique(channels["ref_pos"][:, 0], axis=0)
 
     nominal = _level_b(channels, NOMINAL_HAND_KG, None, None)
-    clean_pos, clean_force, k_cuff = nominal
-    if "payload_mass" in hidden:
-        clean_pos, clean_force, _ = _level_b(channels, params["payload_mass"]["mass_kg"], None, None)
-    if "cuff_compliance" in hidden:
-        clean_pos, clean_force, k_cuff = _level_b(
-            channels, NOMINAL_HAND_KG, params["cuff_compliance"]["time_constant_s"], None
-        )
-        params["cuff_compliance"]["measured_stiffness_N_per_m"] = k_cuff
+    clean_pos, clean_force, _ = nominal
+    fields = None
     if "non_quadratic_field" in hidden:
         eps = params["non_quadratic_field"]["relative_amplitude"]
-        form = _cubic_form(rng)
-        extra = eps * THESIS_FIELD.stiffness(_CENTRE)[:, None] * form  # (2, 4) N/m
+        extra = eps * THESIS_FIELD.stiffness(_CENTRE)[:, None] * _cubic_form(rng)  # (2, 4) N/m
         params["non_quadratic_field"]["cubic_N_per_m"] = extra.tolist()
-        clean_pos, clean_force, _ = _level_b(
-            channels, NOMINAL_HAND_KG, None, _taylor_fields(THESIS_FIELD, extra, stops)
+        fields = _taylor_fields(THESIS_FIELD, extra, stops)
+    if set(hidden) & {"payload_mass", "cuff_compliance", "non_quadratic_field"}:  # the physics' own
+        clean_pos, clean_force, k_cuff = _level_b(
+            channels,
+            params.get("payload_mass", {}).get("mass_kg", NOMINAL_HAND_KG),
+            params.get("cuff_compliance", {}).get("time_constant_s"),
+            fields,
         )
+        if "cuff_compliance" in hidden:
+            params["cuff_compliance"]["measured_stiffness_N_per_m"] = k_cuff
     force = clean_force.copy()
     t = np.asarray(meta["t_start_s"], float)[:, None] + np.arange(force.shape[1])[None, :] / 1000.0
     if "force_sensor_drift" in hidden:
