@@ -18,7 +18,7 @@ from armlab.diagnosis.scoring import expected_verdict
 from armlab.errors import ConfigError, DataError
 from armlab.models.cartesian_field import THESIS_FIELD, quadratic_basis
 from armlab.protocols.cartesian_online.config import CartesianOnlineConfig, SimulationConfig
-from armlab.protocols.cartesian_online.diagnosis.data import load_cart_trials, prepare_cart
+from armlab.protocols.cartesian_online.diagnosis.data import MIN_FLOOR, load_cart_trials, prepare_cart
 from armlab.protocols.cartesian_online.diagnosis.diagnose import cart_candidates, diagnose_cart
 from armlab.protocols.cartesian_online.diagnosis.models import cubic_basis
 from armlab.protocols.cartesian_online.diagnosis.referee import (
@@ -28,24 +28,26 @@ from armlab.protocols.cartesian_online.diagnosis.referee import (
     _taylor_fields,
     make_cart_dataset,
 )
-from armlab.protocols.cartesian_online.experiment import _timeline, case_trials
+from armlab.protocols.cartesian_online.experiment import CHANNEL_UNITS, _timeline, case_trials
 from armlab.sim.cartesian_level_a import simulate_level_a
 
 NOISE_N = 0.3  # N, the referee's white F/T noise (RefereeConfig.force_noise_N)
 
 
-def _level_a(noise: float, seed: int = 0, n_stops: int = 12) -> TrialSet:
-    """Exp. 4 of the thesis by its own generator (level A), as a trial set of the measured channels."""
+def _level_a(noise: float, seed: int = 0, n_stops: int = 12, velocity: bool = False) -> TrialSet:
+    """Exp. 4 of the thesis by its own generator (level A), as a trial set of the measured channels
+    (with ``velocity``, also the generator's exact ``hand_vel``)."""
     cfg = CartesianOnlineConfig(simulation=SimulationConfig(n_stops=n_stops))
     rec = simulate_level_a(
         _timeline(cfg, 4, "triangular"), THESIS_FIELD, noise_std_n=noise, rng=np.random.default_rng(seed)
     )
     ch, meta = case_trials("exp4", rec, 400)
+    names = ("hand_pos", "ref_pos", "hand_force", *(("hand_vel",) if velocity else ()))
     return TrialSet(
         fs_hz=1000.0,
         onset_index=np.ones(len(meta["case"]), dtype=int),
-        channels={k: ch[k] for k in ("hand_pos", "ref_pos", "hand_force")},
-        units={"hand_pos": "m", "ref_pos": "m", "hand_force": "N"},
+        channels={k: ch[k] for k in names},
+        units={k: CHANNEL_UNITS[k] for k in names},
         trial_meta={k: meta[k] for k in ("case", "stop", "n_logged", "t_start_s")},
         attrs={"protocol": "cartesian_online"},
     )
@@ -68,6 +70,14 @@ def test_noise_floor_and_nominal_field_on_the_thesis_generator():
     np.testing.assert_allclose(clean.delta0, THESIS_FIELD.delta, rtol=1e-2)
     assert sorted(set(clean.phase)) == ["+x", "+x-y", "-y"]
     assert set(np.unique(clean.stop[clean.held_trials])) == {1, 4, 7, 10}
+
+
+def test_the_thesis_generator_without_noise_is_none():
+    # the nominal model is the generator's own (with its exact velocity): the gap is round-off,
+    # below the floor's minimum (MIN_FLOOR of the force power), and nothing is selected
+    res, _ = diagnose_cart(_level_a(0.0, velocity=True), DiagnosisConfig())
+    assert res["verdict"] == ["none"]
+    assert res["gap"]["nominal"] < MIN_FLOOR
 
 
 def test_taylor_field_per_stop_is_the_cubic_field_up_to_its_third_order_remainder():

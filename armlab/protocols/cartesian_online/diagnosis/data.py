@@ -9,10 +9,12 @@ reading in the thesis's frame), and the trial_meta ``case``, ``stop``, ``n_logge
 (Ch. 3, §3.2.2); a run folder holds several cases, of which the diagnosis takes Exp. 4's
 (``exp4``: the circle, +x / −y / (+x, −y) sequences), or the only case a file holds.
 
-Velocity and acceleration are the central differences of the measured position (the thesis's
-``q̇_h`` is measured by no sensor). Scoring rows are every logged sample of every trial, both
-axes, after a zero-phase low-pass at ``band_hz`` (4th order forward-backward, the same filter on
-the force and on every model column, so a linear model stays linear). Whole sequences are held
+Velocity is the file's ``hand_vel`` channel where it has one (level B writes the central
+differences of its encoders' position; level A the generator's exact ``q̇_h``), else the central
+differences of ``hand_pos``; acceleration is the central differences of the velocity. Scoring
+rows are every logged sample of every trial, both axes, after a zero-phase low-pass at ``band_hz``
+(4th order forward-backward, the same filter on the force and on every model column, so a linear
+model stays linear). Whole sequences are held
 out: every third stop, starting with the second (the field is fitted on the others around the
 circle and predicts the held-out ones).
 
@@ -20,7 +22,8 @@ Noise floor: the white force noise of each axis from the second differences of t
 (Rice 1984: ``E[(Δ²F)²] = 6σ²``), by the median over samples (divided by 0.4549, the median of a
 χ² with one degree of freedom), so the few samples at the triangle's corners, where the force
 itself bends, do not count; then through the band's zero-phase filter (its exact white-noise
-gain, the sum of its squared impulse response).
+gain, the sum of its squared impulse response). It is never taken below :data:`MIN_FLOOR` of the
+force's power: on noise-free data (level A) the gap is round-off, which no effect explains.
 """
 
 from __future__ import annotations
@@ -38,6 +41,7 @@ from armlab.models.cartesian_field import quadratic_basis
 
 __all__ = [
     "AXES",
+    "MIN_FLOOR",
     "CartSet",
     "load_cart_trials",
     "prepare_cart",
@@ -47,8 +51,13 @@ AXES = ("x", "y")
 _REQUIRED = ("hand_pos", "ref_pos", "hand_force")
 _DIFF_MEDIAN_CHI2 = 0.4549364  # median of a χ² variable with one degree of freedom
 _MAX_HAND_POS_M = 2.0  # m, the thesis's workspace lies within 1.2 m of its origin (Table 3.3)
+_MAX_HAND_VEL_M_S = 10.0  # m/s, beyond the fastest human reaching (~2-5 m/s): the unit is not m/s
 _MAX_HAND_FORCE_N = 2000.0  # N, ten times the JR3's rated 200 N: beyond, the unit is not N
 _HELD_EVERY = 3  # every third sequence is held out
+#: the smallest noise variance, as a fraction of the force's mean square per axis: the 12 + 2 fit's
+#: round-off on noise-free data (level A: gap ~1e-12 with the exact velocity) stays below it, and
+#: the JR3's 0.0122 N steps alone (0.0035 N rms) are 3e-8 of a 20 N rms force
+MIN_FLOOR = 1e-9
 
 
 def load_cart_trials(path: Path):
@@ -77,18 +86,17 @@ def load_cart_trials(path: Path):
     missing = [c for c in _REQUIRED if c not in trials.channels]
     if missing:
         raise DataError(f"{path.name} lacks channel(s) {missing}; have {sorted(trials.channels)}")
-    for name, bound in (
-        ("hand_pos", _MAX_HAND_POS_M),
-        ("ref_pos", _MAX_HAND_POS_M),
-        ("hand_force", _MAX_HAND_FORCE_N),
-    ):
+    checked = [("hand_pos", _MAX_HAND_POS_M), ("ref_pos", _MAX_HAND_POS_M), ("hand_force", _MAX_HAND_FORCE_N)]
+    if "hand_vel" in trials.channels:
+        checked.append(("hand_vel", _MAX_HAND_VEL_M_S))
+    for name, bound in checked:
         a = np.asarray(trials.channels[name])
         if a.shape[-1] != 2:
             raise DataError(f"{path.name}: channel {name!r} must have the 2 axes (x, y), got shape {a.shape}")
         if not np.all(np.isfinite(a)):
             raise DataError(f"{path.name}: channel {name!r} holds NaN or infinite values")
         if np.abs(a).max() > bound:
-            unit = "N" if name == "hand_force" else "m"
+            unit = {"hand_force": "N", "hand_vel": "m/s"}.get(name, "m")
             raise DataError(
                 f"{path.name}: channel {name!r} reaches {np.abs(a).max():.4g}, beyond {bound:g} {unit}; "
                 f"the diagnosis computes in m and N (stored unit: {trials.units.get(name)!r})"
@@ -260,7 +268,10 @@ def prepare_cart(trials, *, band_hz: float) -> CartSet:
     q = ch["hand_pos"]
     ref = ch["ref_pos"]
     p = q - ref
-    v = np.gradient(q, 1.0 / fs, axis=1)
+    if "hand_vel" in trials.channels:
+        v = np.asarray(trials.channels["hand_vel"], float)[rows]
+    else:
+        v = np.gradient(q, 1.0 / fs, axis=1)
     a = np.gradient(v, 1.0 / fs, axis=1)
     force = ch["hand_force"]
     # the sequence of each trial: its stop, or the distinct reference positions in time order
@@ -294,7 +305,8 @@ def prepare_cart(trials, *, band_hz: float) -> CartSet:
     radius = float(np.sqrt(np.mean(np.sum((stops - centre) ** 2, axis=1)))) or 0.1
     d2 = np.diff(np.where(valid[..., None], force, np.nan), 2, axis=1)
     d2 = d2[np.all(np.isfinite(d2), axis=-1)]
-    noise_var = np.median(d2**2, axis=0) / (6.0 * _DIFF_MEDIAN_CHI2)
+    power = np.mean(force[valid] ** 2, axis=0)
+    noise_var = np.maximum(np.median(d2**2, axis=0) / (6.0 * _DIFF_MEDIAN_CHI2), MIN_FLOOR * power)
     phase = _phase_labels(p, valid)
     names = tuple(f"seq {s} {ph}" for s, ph in zip(stop, phase, strict=True))
     return CartSet(
