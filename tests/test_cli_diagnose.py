@@ -93,7 +93,8 @@ def trial_folder(tmp_path):
         (["estimator.x=1"], "unknown argument 'estimator.x=1'"),
         (
             ["data={data}", "protocol=fractional_elbow"],
-            "protocol 'fractional_elbow' cannot be diagnosed; valid: ['conditioning_window', 'joint_1dof']",
+            "protocol 'fractional_elbow' cannot be diagnosed; valid: "
+            "['conditioning_window', 'joint_1dof', 'cartesian_online']",
         ),
         (
             ["data={data}/missing", "protocol=joint_1dof"],
@@ -141,7 +142,7 @@ def test_diagnose_argument_errors(args, message, trial_folder, tmp_path, capsys)
     [
         (
             ["referee.protocol=x"],
-            "unknown protocol 'x'; valid: ['conditioning_window', 'joint_1dof']",
+            "unknown protocol 'x'; valid: ['conditioning_window', 'joint_1dof', 'cartesian_online']",
         ),
         (
             ["referee.classes=[nope]"],

@@ -41,6 +41,7 @@ __all__ = [
     "ForceSensorDrift",
     "ForceSensorNoise",
     "JointFriction",
+    "NonQuadraticField",
     "PayloadMass",
     "PlaneTilt",
     "Reflex",
@@ -285,6 +286,21 @@ class OperatingPointImpedance(Effect):
 
 
 @dataclass(kw_only=True)
+class NonQuadraticField(Effect):
+    NAME: ClassVar[str] = "non_quadratic_field"
+    PHYSICS: ClassVar[str] = (
+        "the hand's stiffness field over the workspace is not the quadratic polynomial of the "
+        "position the model assumes (Eq. 2.2.4 of paper 002): a third-order term, relative to the "
+        "stiffness at the workspace's centre, at the edge of the perturbed region"
+    )
+    SOURCE: ClassVar[str] = (
+        "paper 002 (MSc thesis) §2.2 and Exp. 5: the quadratic is a fit of refs [27]/[28]; the "
+        "polar model's anti-diagonal needs order >= 2-3 (measured, docs of paper 002)"
+    )
+    relative_amplitude: float = 0.03  # 1, cubic term at the circle's radius / K at its centre
+
+
+@dataclass(kw_only=True)
 class RobotModelError(Effect):
     NAME: ClassVar[str] = "robot_model_error"
     LEVEL: ClassVar[EffectLevel] = "controller"
@@ -343,6 +359,7 @@ EFFECTS: dict[str, type[Effect]] = {
         PayloadMass,
         CocontractionVariation,
         OperatingPointImpedance,
+        NonQuadraticField,
         RobotModelError,
         PlaneTilt,
         TorsoTranslation,
@@ -369,6 +386,7 @@ class EffectsConfig:
     payload_mass: PayloadMass | None = None
     cocontraction_variation: CocontractionVariation | None = None
     operating_point_impedance: OperatingPointImpedance | None = None
+    non_quadratic_field: NonQuadraticField | None = None
     robot_model_error: RobotModelError | None = None
     plane_tilt: PlaneTilt | None = None
     torso_translation: TorsoTranslation | None = None

@@ -5,6 +5,10 @@ only inside its functions.
 """
 
 from armlab.viz._paths import preload_rerun
+from armlab.viz.cart_diagnosis import (
+    cart_diagnosis_figures,
+    cart_diagnosis_recording,
+)
 from armlab.viz.cartesian import (
     format_cartesian_table,
     plot_cartesian_figures,
@@ -65,6 +69,8 @@ __all__ = [
     "format_cartesian_table",
     "plot_cartesian_figures",
     "write_cartesian_recording",
+    "cart_diagnosis_figures",
+    "cart_diagnosis_recording",
     "cond_diagnosis_figures",
     "cond_diagnosis_recording",
     "diagnosis_figures",

@@ -16,6 +16,7 @@ from armlab.protocols.cartesian_online.config import (
     IdentificationConfig,
     SimulationConfig,
 )
+from armlab.protocols.cartesian_online.diagnosis import HOOKS
 from armlab.sim.cartesian_level_b import load_level_b_compiled
 
 __all__ = [
@@ -44,7 +45,17 @@ PROTOCOL = Protocol(
         "run protocol=cartesian_online simulation.hand_mass_kg=0.1",
         "run protocol=cartesian_online simulation.stiffness_scale=0.05 seed=3",
         "estimate outputs/cartesian_online/<run> identification.r2_adj_threshold=0.99",
+        "diagnose data=outputs/cartesian_online/<run> protocol=cartesian_online",
+        "diagnose-benchmark referee.protocol=cartesian_online referee.replicates=2",
     ),
     lab_effects={"force_sensor_noise": "simulation.force_noise_std_N"},
-    catalogue=("force_sensor_noise",),
+    catalogue=(
+        "force_sensor_noise",
+        "force_sensor_drift",
+        "payload_mass",
+        "cuff_compliance",
+        "channel_delay",
+        "non_quadratic_field",
+    ),
+    diagnosis=HOOKS,
 )

@@ -1,0 +1,208 @@
+"""``armlab diagnose`` for ``cartesian_online``: where the thesis's field misses, which effect, how far.
+
+The nominal simulation is the thesis's quadratic field with ``D = δ√K`` (Eqs. 2.2.1-2.2.4, 3.4.1)
+calibrated on the training sequences; the held-out sequences' force is predicted and scored
+(:mod:`.data`, :mod:`.models`). Pure computation: a trial set and a :class:`DiagnosisConfig` in,
+a JSON-ready results dict (docs/diagnosis_schema.md, section ``cartesian_online``) and the
+signals for the figures out.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict
+
+import numpy as np
+
+from armlab.config.diagnosis import DiagnosisConfig
+from armlab.diagnosis.attribution import held_out_gap, select_candidates, select_effects
+from armlab.diagnosis.families import FittedModel
+from armlab.diagnosis.localise import BANDS_HZ, WINDOWS_MS
+from armlab.protocols.cartesian_online.diagnosis.data import AXES, CartSet, prepare_cart
+from armlab.protocols.cartesian_online.diagnosis.models import CART_FAMILY, CART_SURROGATES
+from armlab.protocols.cartesian_online.diagnosis.rules import RULES
+
+__all__ = [
+    "cart_candidates",
+    "diagnose_cart",
+]
+
+
+def cart_candidates(cfg: DiagnosisConfig) -> list[str]:
+    """The candidate list after ``candidates`` / ``exclude`` (unknown names raise ConfigError)."""
+    return select_candidates(cfg, CART_SURROGATES, "cartesian_online")
+
+
+def _gap(resid: np.ndarray, y: np.ndarray, noise: np.ndarray, mask: np.ndarray) -> dict:
+    tss = float(np.sum(y[mask] ** 2))
+    if tss == 0:
+        return {"held_out_gap": None, "noise_floor": None, "n_rows": int(mask.sum())}
+    return {
+        "held_out_gap": float(np.sum(resid[mask] ** 2)) / tss,
+        "noise_floor": float(np.sum(noise[mask])) / tss,
+        "n_rows": int(mask.sum()),
+    }
+
+
+def _trial_major(cs: CartSet, rows: np.ndarray) -> np.ndarray:
+    """Scoring rows -> (m, n, 2), zero on the padding."""
+    out = np.zeros((*cs.valid.shape, 2))
+    out[cs.valid] = rows.reshape(-1, 2)
+    return out
+
+
+def _breakdowns(cs: CartSet, y: np.ndarray, resid: np.ndarray) -> dict:
+    """Held-out gap by window after onset, axis, sequence, perturbation and frequency band."""
+    noise, held = cs.row_noise_var, cs.held
+    t_ms = 1000.0 * cs.row_time_s
+    row_stop, row_phase = cs.stop[cs.row_trial], cs.phase[cs.row_trial]
+    windows = [
+        {"window_ms": [lo, hi], **_gap(resid, y, noise, held & (t_ms >= lo) & (t_ms < hi))}
+        for lo, hi in WINDOWS_MS
+    ]
+    channels = [
+        {"channel": "hand_force", "axis": a, **_gap(resid, y, noise, held & (cs.row_axis == j))}
+        for j, a in enumerate(AXES)
+    ]
+    sequences = [
+        {"sequence": int(s), **_gap(resid, y, noise, held & (row_stop == s))}
+        for s in np.unique(cs.stop[cs.held_trials])
+    ]
+    phases = [
+        {"perturbation": str(ph), **_gap(resid, y, noise, held & (row_phase == ph))}
+        for ph in np.unique(cs.phase)
+    ]
+    r3, y3 = _trial_major(cs, resid)[cs.held_trials], _trial_major(cs, y)[cs.held_trials]
+    n = r3.shape[1]
+    win = np.hanning(n)[None, :, None]
+    f = np.fft.rfftfreq(n, 1.0 / cs.fs_hz)
+    pr = np.sum(np.abs(np.fft.rfft(r3 * win, axis=1)) ** 2, axis=(0, 2))
+    py = np.sum(np.abs(np.fft.rfft(y3 * win, axis=1)) ** 2, axis=(0, 2))
+    bands = []
+    for lo, hi in BANDS_HZ:
+        sel = (f >= lo) & (f < hi)
+        bands.append(
+            {
+                "band_hz": [lo, hi],
+                "residual_share": float(pr[sel].sum() / pr.sum()) if pr.sum() > 0 else 0.0,
+                "held_out_gap": float(pr[sel].sum() / py[sel].sum()) if py[sel].sum() > 0 else None,
+            }
+        )
+    return {
+        "windows": windows,
+        "channels": channels,
+        "sequences": sequences,
+        "perturbations": phases,
+        "bands": bands,
+    }
+
+
+def _residual_tests(cs: CartSet, resid: np.ndarray, max_lag_s: float = 0.05) -> dict:
+    """Whiteness of the held-out residual and its cross-correlation with the hand velocity."""
+    r = _trial_major(cs, resid)[cs.held_trials]
+    v = cs.band(cs.v)[cs.held_trials]
+    n = r.shape[1]
+    lags = np.arange(int(round(max_lag_s * cs.fs_hz)) + 1)
+    r0 = r - r.mean(axis=1, keepdims=True)
+    v0 = v - v.mean(axis=1, keepdims=True)
+    denom_r = np.sum(r0**2)
+    acf = np.array([np.sum(r0[:, k:] * r0[:, : n - k]) / denom_r for k in lags])
+    xcf = np.array([np.sum(r0[:, k:] * v0[:, : n - k]) for k in lags]) / np.sqrt(denom_r * np.sum(v0**2))
+    k_max = int(np.argmax(np.abs(xcf)))
+    return {
+        "lags_s": (lags / cs.fs_hz).tolist(),
+        "autocorrelation": acf.tolist(),
+        "cross_correlation_velocity": xcf.tolist(),
+        "bound_95": float(1.96 / np.sqrt(r0.size)),
+        "max_cross_correlation": float(xcf[k_max]),
+        "max_cross_correlation_lag_s": float(lags[k_max] / cs.fs_hz),
+    }
+
+
+def _stage(cs: CartSet, y: np.ndarray, model: FittedModel, floor: float) -> dict:
+    gap, _, _ = held_out_gap(model, (cs,), [y])
+    return {
+        "effects": list(model.effects),
+        "held_out_gap": gap,
+        "held_out_vaf_percent": 100.0 * (1.0 - gap),
+        "noise_floor": floor,
+        **_breakdowns(cs, y, model.residuals[0]),
+        "parameters": dict(zip(model.linear_names, map(float, model.beta[0]), strict=True)),
+        "nonlinear_parameters": dict(model.theta),
+        "n_params": model.n_params,
+    }
+
+
+def diagnose_cart(trials, cfg: DiagnosisConfig) -> tuple[dict, dict]:
+    """Diagnose a ``cartesian_online`` trial set (see the module docstring).
+
+    Args:
+        trials: a :class:`armlab.data.trial.TrialSet` with ``hand_pos``, ``ref_pos``, ``hand_force``.
+        cfg: the diagnosis settings (``band_hz`` and the selection rules).
+
+    Returns:
+        (results, series): ``series["all"]`` holds the scoring set and each stage's prediction.
+    """
+    cfg = cfg.with_rules(RULES)
+    names = cart_candidates(cfg)
+    cs = prepare_cart(trials, band_hz=cfg.band_hz)
+    y = cs.y
+    floor = float(np.sum(cs.row_noise_var[cs.held])) / float(np.sum(y[cs.held] ** 2))
+    sel = select_effects(
+        (cs,),
+        [y],
+        None,
+        {n: CART_SURROGATES[n] for n in names},
+        floor,
+        cfg,
+        band_share=cfg.band_hz / (0.5 * cs.fs_hz),
+        family=CART_FAMILY,
+    )
+    stages = [_stage(cs, y, m, floor) for m in sel.stages]
+    strip = [[{k: v for k, v in e.items() if k != "model"} for e in r] for r in sel.rankings]
+    results = {
+        "protocol": "cartesian_online",
+        "settings": asdict(cfg),
+        "verdict": sel.verdict,
+        "ranking": strip[0] if strip else [],
+        "ranking_steps": strip,
+        "gap": {
+            "metric": "held-out residual power / measured force power, every logged sample, both axes, "
+            f"0-{cfg.band_hz:g} Hz (1 - VAF)",
+            "nominal": stages[0]["held_out_gap"],
+            "added": [{"effects": s["effects"], "held_out_gap": s["held_out_gap"]} for s in stages[1:]],
+            "noise_floor": floor,
+            "noise_source": "second differences of the raw force (white noise assumed), median per axis, "
+            "through the band's zero-phase filter",
+        },
+        "where": {
+            "windows": stages[0]["windows"],
+            "bands": stages[0]["bands"],
+            "channels": stages[0]["channels"],
+            "sequences": stages[0]["sequences"],
+            "perturbations": stages[0]["perturbations"],
+            "residual_tests": _residual_tests(cs, sel.stages[0].residuals[0]),
+        },
+        "how_far": stages,
+        "indistinct": sel.indistinct,
+        "partial": sel.partial,
+        "trials": list(cs.names),
+        "nominal_field": {
+            "k_N_per_m": cs.k0.tolist(),
+            "delta": cs.delta0.tolist(),
+            "note": "D = δ√K fit (12 + 2) on the training sequences, in Table 3.1's basis "
+            "[1, x, y, x², 2xy, y²]",
+        },
+        "scoring": {
+            "held_out_sequences": sorted({int(s) for s in cs.stop[cs.held_trials]}),
+            "n_sequences": int(cs.stop.max()) + 1,
+            "held_out_trials": int(cs.held_trials.sum()),
+        },
+    }
+    series = {
+        "set": cs,
+        "measured": y,
+        "nominal": sel.stages[0].predictions[0],
+        "corrected": sel.stages[-1].predictions[0],
+        "stages": sel.stages,
+    }
+    return results, {"all": series}
