@@ -384,3 +384,66 @@ def format_summary(results: Mapping[str, Any]) -> str:
             lines.append(f"  {p['trial']}: verdict {' -> '.join(p['verdict'])}")
             lines += summary_lines(p, "    ")
     return "\n".join(lines)
+
+
+# ---------------------------------------------------------------------------------------------
+# report sections every protocol's report shares
+# ---------------------------------------------------------------------------------------------
+
+
+def which_effect_section(r: Mapping[str, Any], what: str = "trials") -> list[str]:
+    """``## Which effect``: each greedy step's ranking of the candidates (an absorbed one marked
+    so), then the pairs the data cannot tell apart (``what``: what the data are called, e.g.
+    ``trials`` or ``sequences``)."""
+    out = ["", "## Which effect", ""]
+    for step, ranking in enumerate(r.get("ranking_steps") or [], start=1):
+        out += [f"### Greedy step {step}", ""]
+        out += md_table(
+            [
+                "candidate",
+                "held-out gap",
+                "reduction",
+                "share of the nominal excess",
+                "Δ penalised score (BIC)",
+                "added parameters",
+                "fitted",
+            ],
+            [
+                [
+                    effect_label(e["name"]),
+                    fmt_pct(e["held_out_gap"]) if e.get("identifiable", True) else "absorbed",
+                    fmt_pct(e["gap_reduction"]),
+                    fmt_share(e["explained_fraction"]),
+                    fmt_score(e["delta_bic"]),
+                    e["added_params"],
+                    own_params(e["name"], e["params"]),
+                ]
+                for e in ranking
+            ],
+        )
+        out.append("")
+    if r.get("indistinct"):
+        out += [f"### Effects these {what} cannot tell apart", ""]
+        for p in r["indistinct"]:
+            a, b = p["effects"]
+            out.append(f"- `{a}` vs {b}: {p['separating_trial']}.")
+    return out
+
+
+def how_far_table(stages: Sequence[Mapping[str, Any]]) -> list[str]:
+    """``## How far the gap shrinks``: held-out VAF, gap, gap over the floor and parameters of
+    each stage (``results['how_far']``), nominal first."""
+    out = ["", "## How far the gap shrinks", ""]
+    return out + md_table(
+        ["model", "held-out VAF", "gap", "gap / floor", "parameters"],
+        [
+            [
+                stage_name(s["effects"]),
+                fmt_vaf(s["held_out_gap"]),
+                fmt_pct(s["held_out_gap"]),
+                fmt_ratio(s["held_out_gap"], s["noise_floor"]),
+                s["n_params"],
+            ]
+            for s in stages
+        ],
+    )

@@ -6,18 +6,14 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from armlab.diagnosis.report_text import (
-    effect_label,
     fmt_num,
     fmt_pct,
-    fmt_ratio,
-    fmt_score,
     fmt_share,
-    fmt_vaf,
     gap_cells,
+    how_far_table,
     md_table,
-    own_params,
-    stage_name,
     verdict_paragraph,
+    which_effect_section,
     window_meaning,
 )
 from armlab.protocols.cartesian_online.diagnosis.rules import RULES
@@ -85,58 +81,9 @@ def _where(r: Mapping[str, Any]) -> list[str]:
     return out
 
 
-def _which(r: Mapping[str, Any]) -> list[str]:
-    out = ["", "## Which effect", ""]
-    for step, ranking in enumerate(r.get("ranking_steps") or [], start=1):
-        out += [f"### Greedy step {step}", ""]
-        out += md_table(
-            [
-                "candidate",
-                "held-out gap",
-                "reduction",
-                "share of the nominal excess",
-                "Δ penalised score (BIC)",
-                "added parameters",
-                "fitted",
-            ],
-            [
-                [
-                    effect_label(e["name"]),
-                    fmt_pct(e["held_out_gap"]),
-                    fmt_pct(e["gap_reduction"]),
-                    fmt_share(e["explained_fraction"]),
-                    fmt_score(e["delta_bic"]),
-                    e["added_params"],
-                    own_params(e["name"], e["params"]),
-                ]
-                for e in ranking
-            ],
-        )
-        out.append("")
-    if r.get("indistinct"):
-        out += ["### Effects these sequences cannot tell apart", ""]
-        for p in r["indistinct"]:
-            a, b = p["effects"]
-            out.append(f"- `{a}` vs {b}: {p['separating_trial']}.")
-    return out
-
-
 def _how_far(r: Mapping[str, Any]) -> list[str]:
     stages = r["how_far"]
-    out = ["", "## How far the gap shrinks", ""]
-    out += md_table(
-        ["model", "held-out VAF", "gap", "gap / floor", "parameters"],
-        [
-            [
-                stage_name(s["effects"]),
-                fmt_vaf(s["held_out_gap"]),
-                fmt_pct(s["held_out_gap"]),
-                fmt_ratio(s["held_out_gap"], s["noise_floor"]),
-                s["n_params"],
-            ]
-            for s in stages
-        ],
-    )
+    out = how_far_table(stages)
     out += [
         "",
         "Calibrated parameters of the last stage (k N/m per power of the scaled position, δ as a "
@@ -165,7 +112,7 @@ def format_cart_report(results: Mapping[str, Any], *, data_path: str, figures: S
         verdict_paragraph(r, {**RULES, **(r.get("settings") or {})}),
         "",
     ]
-    lines += _where(r) + _which(r) + _how_far(r)
+    lines += _where(r) + which_effect_section(r, "sequences") + _how_far(r)
     if figures:
         lines += ["", "## Figures", ""] + [f"![{f}]({f})" for f in figures]
     return "\n".join(lines) + "\n"

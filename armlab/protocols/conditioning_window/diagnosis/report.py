@@ -6,18 +6,16 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 from armlab.diagnosis.report_text import (
-    effect_label,
     fmt_num,
     fmt_pct,
     fmt_ratio,
-    fmt_score,
     fmt_share,
-    fmt_vaf,
     gap_cells,
+    how_far_table,
     md_table,
-    own_params,
     stage_name,
     verdict_paragraph,
+    which_effect_section,
     window_meaning,
 )
 from armlab.protocols.conditioning_window.diagnosis.rules import RULES
@@ -109,58 +107,9 @@ def _where(r: Mapping[str, Any]) -> list[str]:
     return out
 
 
-def _which(r: Mapping[str, Any]) -> list[str]:
-    out = ["", "## Which effect", ""]
-    for step, ranking in enumerate(r.get("ranking_steps") or [], start=1):
-        out += [f"### Greedy step {step}", ""]
-        out += md_table(
-            [
-                "candidate",
-                "held-out gap",
-                "reduction",
-                "share of the nominal excess",
-                "Δ penalised score (BIC)",
-                "added parameters",
-                "fitted",
-            ],
-            [
-                [
-                    effect_label(e["name"]),
-                    fmt_pct(e["held_out_gap"]) if e["identifiable"] else "absorbed",
-                    fmt_pct(e["gap_reduction"]),
-                    fmt_share(e["explained_fraction"]),
-                    fmt_score(e["delta_bic"]),
-                    e["added_params"],
-                    own_params(e["name"], e["params"]),
-                ]
-                for e in ranking
-            ],
-        )
-        out.append("")
-    if r.get("indistinct"):
-        out += ["### Effects these trials cannot tell apart", ""]
-        for p in r["indistinct"]:
-            a, b = p["effects"]
-            out.append(f"- `{a}` vs {b}: {p['separating_trial']}.")
-    return out
-
-
 def _how_far(r: Mapping[str, Any]) -> list[str]:
     stages = r["how_far"]
-    out = ["", "## How far the gap shrinks", ""]
-    out += md_table(
-        ["model", "held-out VAF", "gap", "gap / floor", "parameters"],
-        [
-            [
-                stage_name(s["effects"]),
-                fmt_vaf(s["held_out_gap"]),
-                fmt_pct(s["held_out_gap"]),
-                fmt_ratio(s["held_out_gap"], s["noise_floor"]),
-                s["n_params"],
-            ]
-            for s in stages
-        ],
-    )
+    out = how_far_table(stages)
     out += ["", "Per window after onset (gap / floor):", ""]
     windows = [f"{w['window_ms'][0]:g}–{w['window_ms'][1]:g} ms" for w in stages[0]["windows"]]
     out += md_table(
@@ -197,7 +146,7 @@ def format_cond_report(results: Mapping[str, Any], *, data_path: str, figures: S
         verdict_paragraph(r, {**RULES, **(r.get("settings") or {})}),
         "",
     ]
-    lines += _where(r) + _which(r) + _how_far(r)
+    lines += _where(r) + which_effect_section(r, "trials") + _how_far(r)
     if figures:
         lines += ["", "## Figures", ""] + [f"![{f}]({f})" for f in figures]
     return "\n".join(lines) + "\n"
