@@ -18,8 +18,10 @@ __all__ = [
     "WINDOWS_MS",
     "band_breakdown",
     "frf_parameters",
+    "masked_gap",
     "onsets",
     "residual_tests",
+    "trial_band_breakdown",
     "window_breakdown",
 ]
 
@@ -161,3 +163,43 @@ def frf_parameters(trial, torque: np.ndarray, *, band_hz=(1.0, 20.0), nperseg: i
     ).band(*band_hz)
     b = levy_fit(z.f_hz, z.G, _IMPEDANCE, 1.0).model.b  # ascending powers of s: K, B, I
     return {"I": float(b[2]), "B": float(b[1]), "K": float(b[0])}
+
+
+def masked_gap(resid: np.ndarray, y: np.ndarray, noise_var: np.ndarray, mask: np.ndarray) -> dict:
+    """Held-out gap and noise floor of the scoring rows in ``mask`` (1-D arrays of rows: residual,
+    measured, each row's noise variance), with the number of rows; None where the slice has no
+    measured power."""
+    tss = float(np.sum(y[mask] ** 2))
+    if tss == 0:
+        return {"held_out_gap": None, "noise_floor": None, "n_rows": int(mask.sum())}
+    return {
+        "held_out_gap": float(np.sum(resid[mask] ** 2)) / tss,
+        "noise_floor": float(np.sum(noise_var[mask])) / tss,
+        "n_rows": int(mask.sum()),
+    }
+
+
+def trial_band_breakdown(resid: np.ndarray, y: np.ndarray, fs_hz: float) -> list[dict]:
+    """Residual share and held-out gap per :data:`BANDS_HZ` band of short held-out trials.
+
+    Args:
+        resid, y: (n_trials, n_samples, n_channels) residual and measured signal of each trial's
+            scored stretch; their Hann-windowed spectra are summed over trials and channels.
+        fs_hz: Hz, sample rate.
+    """
+    n = resid.shape[1]
+    win = np.hanning(n)[None, :, None]
+    f = np.fft.rfftfreq(n, 1.0 / fs_hz)
+    pr = np.sum(np.abs(np.fft.rfft(resid * win, axis=1)) ** 2, axis=(0, 2))
+    py = np.sum(np.abs(np.fft.rfft(y * win, axis=1)) ** 2, axis=(0, 2))
+    bands = []
+    for lo, hi in BANDS_HZ:
+        sel = (f >= lo) & (f < hi)
+        bands.append(
+            {
+                "band_hz": [lo, hi],
+                "residual_share": float(pr[sel].sum() / pr.sum()) if pr.sum() > 0 else 0.0,
+                "held_out_gap": float(pr[sel].sum() / py[sel].sum()) if py[sel].sum() > 0 else None,
+            }
+        )
+    return bands

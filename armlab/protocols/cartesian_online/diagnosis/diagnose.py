@@ -16,7 +16,7 @@ import numpy as np
 from armlab.config.diagnosis import DiagnosisConfig
 from armlab.diagnosis.attribution import held_out_gap, select_candidates, select_effects
 from armlab.diagnosis.families import FittedModel
-from armlab.diagnosis.localise import BANDS_HZ, WINDOWS_MS
+from armlab.diagnosis.localise import WINDOWS_MS, masked_gap, trial_band_breakdown
 from armlab.protocols.cartesian_online.diagnosis.data import AXES, CartSet, prepare_cart
 from armlab.protocols.cartesian_online.diagnosis.models import CART_FAMILY, CART_SURROGATES
 from armlab.protocols.cartesian_online.diagnosis.rules import RULES
@@ -32,15 +32,7 @@ def cart_candidates(cfg: DiagnosisConfig) -> list[str]:
     return select_candidates(cfg, CART_SURROGATES, "cartesian_online")
 
 
-def _gap(resid: np.ndarray, y: np.ndarray, noise: np.ndarray, mask: np.ndarray) -> dict:
-    tss = float(np.sum(y[mask] ** 2))
-    if tss == 0:
-        return {"held_out_gap": None, "noise_floor": None, "n_rows": int(mask.sum())}
-    return {
-        "held_out_gap": float(np.sum(resid[mask] ** 2)) / tss,
-        "noise_floor": float(np.sum(noise[mask])) / tss,
-        "n_rows": int(mask.sum()),
-    }
+_gap = masked_gap
 
 
 def _trial_major(cs: CartSet, rows: np.ndarray) -> np.ndarray:
@@ -72,21 +64,7 @@ def _breakdowns(cs: CartSet, y: np.ndarray, resid: np.ndarray) -> dict:
         for ph in np.unique(cs.phase)
     ]
     r3, y3 = _trial_major(cs, resid)[cs.held_trials], _trial_major(cs, y)[cs.held_trials]
-    n = r3.shape[1]
-    win = np.hanning(n)[None, :, None]
-    f = np.fft.rfftfreq(n, 1.0 / cs.fs_hz)
-    pr = np.sum(np.abs(np.fft.rfft(r3 * win, axis=1)) ** 2, axis=(0, 2))
-    py = np.sum(np.abs(np.fft.rfft(y3 * win, axis=1)) ** 2, axis=(0, 2))
-    bands = []
-    for lo, hi in BANDS_HZ:
-        sel = (f >= lo) & (f < hi)
-        bands.append(
-            {
-                "band_hz": [lo, hi],
-                "residual_share": float(pr[sel].sum() / pr.sum()) if pr.sum() > 0 else 0.0,
-                "held_out_gap": float(pr[sel].sum() / py[sel].sum()) if py[sel].sum() > 0 else None,
-            }
-        )
+    bands = trial_band_breakdown(r3, y3, cs.fs_hz)
     return {
         "windows": windows,
         "channels": channels,

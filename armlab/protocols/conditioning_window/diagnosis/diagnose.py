@@ -15,7 +15,7 @@ import numpy as np
 from armlab.config.diagnosis import DiagnosisConfig
 from armlab.diagnosis.attribution import held_out_gap, select_candidates, select_effects
 from armlab.diagnosis.families import FittedModel
-from armlab.diagnosis.localise import BANDS_HZ, WINDOWS_MS
+from armlab.diagnosis.localise import WINDOWS_MS, masked_gap, trial_band_breakdown
 from armlab.estimation.joint_ls import PARAM_NAMES
 from armlab.protocols.conditioning_window.diagnosis.data import CHANNELS, CondSet, prepare_cond
 from armlab.protocols.conditioning_window.diagnosis.models import COND_FAMILY, COND_SURROGATES
@@ -36,15 +36,7 @@ def cond_candidates(cfg: DiagnosisConfig) -> list[str]:
     return select_candidates(cfg, COND_SURROGATES, "conditioning_window")
 
 
-def _gap(resid: np.ndarray, y: np.ndarray, noise: np.ndarray, mask: np.ndarray) -> dict:
-    tss = float(np.sum(y[mask] ** 2))
-    if tss == 0:
-        return {"held_out_gap": None, "noise_floor": None, "n_rows": int(mask.sum())}
-    return {
-        "held_out_gap": float(np.sum(resid[mask] ** 2)) / tss,
-        "noise_floor": float(np.sum(noise[mask])) / tss,
-        "n_rows": int(mask.sum()),
-    }
+_gap = masked_gap
 
 
 def _breakdowns(cs: CondSet, y: np.ndarray, resid: np.ndarray) -> dict:
@@ -67,20 +59,7 @@ def _breakdowns(cs: CondSet, y: np.ndarray, resid: np.ndarray) -> dict:
     # bands: spectra of the held-out trials' 0-400 ms residual and measured torque (Hann window)
     shape = (cs.n_trials, cs.n_window, 2)
     r3, y3 = resid.reshape(shape)[cs.held_trials], y.reshape(shape)[cs.held_trials]
-    win = np.hanning(cs.n_window)[None, :, None]
-    f = np.fft.rfftfreq(cs.n_window, 1.0 / cs.fs_hz)
-    pr = np.sum(np.abs(np.fft.rfft(r3 * win, axis=1)) ** 2, axis=(0, 2))
-    py = np.sum(np.abs(np.fft.rfft(y3 * win, axis=1)) ** 2, axis=(0, 2))
-    bands = []
-    for lo, hi in BANDS_HZ:
-        sel = (f >= lo) & (f < hi)
-        bands.append(
-            {
-                "band_hz": [lo, hi],
-                "residual_share": float(pr[sel].sum() / pr.sum()) if pr.sum() > 0 else 0.0,
-                "held_out_gap": float(pr[sel].sum() / py[sel].sum()) if py[sel].sum() > 0 else None,
-            }
-        )
+    bands = trial_band_breakdown(r3, y3, cs.fs_hz)
     return {"windows": windows, "channels": channels, "conditions": conditions, "bands": bands}
 
 
