@@ -20,11 +20,11 @@ from matplotlib.figure import Figure
 from armlab.errors import DataError
 from armlab.viz._paths import fresh_path, recording, save_png
 from armlab.viz._ticks import plain_log_ticks
+from armlab.viz._trial_stages import log_trial_stages
 
 __all__ = ["cart_diagnosis_figures", "cart_diagnosis_recording"]
 
 _AXES = ("x", "y")
-_TIMELINE = "time_after_onset"
 
 
 def _per_trial(group: Mapping[str, Any], key: str) -> np.ndarray:
@@ -109,7 +109,6 @@ def cart_diagnosis_recording(
     residual_corrected}`` (N) on the ``time_after_onset`` timeline (s); held-out trials are marked
     by a text log at onset.
     """
-    import rerun as rr
 
     group = series.get("all")
     if group is None or "set" not in group:
@@ -120,27 +119,8 @@ def cart_diagnosis_recording(
     with recording(p, app_id) as rec:  # written under a temporary name, renamed when complete
         for i in range(cs.n_trials):
             n = int(cs.valid[i].sum())
-            t = np.arange(n) / cs.fs_hz
-            for j, axis in enumerate(_AXES):
-                base = f"trials/{i:03d}/{axis}"
-                for name, values in (
-                    ("measured", meas[i, :n, j]),
-                    ("nominal", nom[i, :n, j]),
-                    ("corrected", cor[i, :n, j]),
-                    ("residual_nominal", meas[i, :n, j] - nom[i, :n, j]),
-                    ("residual_corrected", meas[i, :n, j] - cor[i, :n, j]),
-                ):
-                    rec.send_columns(
-                        f"{base}/{name}",
-                        indexes=[rr.TimeColumn(_TIMELINE, duration=t)],
-                        columns=rr.Scalars.columns(scalars=values.astype(np.float64)),
-                    )
-            if cs.held_trials[i]:
-                rec.send_columns(
-                    f"trials/{i:03d}/events",
-                    indexes=[rr.TimeColumn(_TIMELINE, duration=[0.0])],
-                    columns=rr.TextLog.columns(
-                        text=[f"held-out {cs.names[i]}: scored, not fitted"], level=["INFO"]
-                    ),
-                )
+            held = f"held-out {cs.names[i]}: scored, not fitted" if cs.held_trials[i] else None
+            log_trial_stages(
+                rec, i, _AXES, np.arange(n) / cs.fs_hz, meas[i, :n], nom[i, :n], cor[i, :n], held
+            )
     return p

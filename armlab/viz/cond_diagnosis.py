@@ -18,11 +18,11 @@ from matplotlib.figure import Figure
 from armlab.errors import DataError
 from armlab.viz._paths import fresh_path, recording, save_png
 from armlab.viz._ticks import plain_log_ticks
+from armlab.viz._trial_stages import log_trial_stages
 
 __all__ = ["cond_diagnosis_figures", "cond_diagnosis_recording"]
 
 _JOINTS = ("shoulder", "elbow")
-_TIMELINE = "time_after_onset"
 
 
 def _per_trial(group: Mapping[str, Any], key: str) -> np.ndarray:
@@ -98,7 +98,6 @@ def cond_diagnosis_recording(
     residual_corrected}`` on the ``time_after_onset`` timeline (s); held-out trials are marked
     by a text log at onset.
     """
-    import rerun as rr
 
     group = series.get("all")
     if group is None or "set" not in group:
@@ -109,24 +108,6 @@ def cond_diagnosis_recording(
     t = np.arange(cs.n_window) / cs.fs_hz
     with recording(p, app_id) as rec:  # written under a temporary name, renamed when complete
         for i in range(cs.n_trials):
-            for j, joint in enumerate(_JOINTS):
-                base = f"trials/{i:03d}/{joint}"
-                for name, values in (
-                    ("measured", meas[i, :, j]),
-                    ("nominal", nom[i, :, j]),
-                    ("corrected", cor[i, :, j]),
-                    ("residual_nominal", meas[i, :, j] - nom[i, :, j]),
-                    ("residual_corrected", meas[i, :, j] - cor[i, :, j]),
-                ):
-                    rec.send_columns(
-                        f"{base}/{name}",
-                        indexes=[rr.TimeColumn(_TIMELINE, duration=t)],
-                        columns=rr.Scalars.columns(scalars=values.astype(np.float64)),
-                    )
-            if cs.held_trials[i]:
-                rec.send_columns(
-                    f"trials/{i:03d}/events",
-                    indexes=[rr.TimeColumn(_TIMELINE, duration=[0.0])],
-                    columns=rr.TextLog.columns(text=["held-out trial: scored, not fitted"], level=["INFO"]),
-                )
+            held = "held-out trial: scored, not fitted" if cs.held_trials[i] else None
+            log_trial_stages(rec, i, _JOINTS, t, meas[i], nom[i], cor[i], held)
     return p
