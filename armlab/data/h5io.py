@@ -17,7 +17,7 @@ read, because real data must be cleaned before it reaches estimation.
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -33,6 +33,7 @@ __all__ = [
     "FORMAT_VERSION",
     "write_trials",
     "read_trials",
+    "read_trial_file",
 ]
 
 FORMAT_NAME = "armlab-trials"
@@ -249,6 +250,40 @@ def read_trials(path: str | os.PathLike[str]) -> TrialSet:
         raise DataError(
             f"{path}: cannot be read, the file is damaged or unreadable ({msg}); restore it or run again"
         ) from None
+
+
+def read_trial_file(
+    path: str | os.PathLike[str], required: Sequence[str], reader: str
+) -> tuple[Path, TrialSet]:
+    """:func:`read_trials` of a trial file, or of the one ``.h5`` in a run folder, that must hold
+    the ``required`` channels (what a diagnosis reads; ``reader`` names it in the messages).
+
+    Returns:
+        The file read (for messages naming it) and its trial set.
+
+    Raises:
+        DataError: a folder without exactly one ``.h5`` file, a file that is not ``.h5``, a missing
+            channel, or what :func:`read_trials` raises.
+    """
+    path = Path(path)
+    if path.is_dir():
+        files = sorted(path.glob("*.h5"))
+        if len(files) != 1:
+            raise DataError(
+                f"{path} holds {len(files)} .h5 files; give the trial file itself or a run folder "
+                "with exactly one (trials.h5)"
+            )
+        path = files[0]
+    if path.suffix != ".h5":
+        raise DataError(
+            f"{path.name}: {reader} reads armlab trial files (.h5, docs/trial_format.md); valid: a "
+            "trials.h5 file or its run folder"
+        )
+    trials = read_trials(path)
+    missing = [c for c in required if c not in trials.channels]
+    if missing:
+        raise DataError(f"{path.name} lacks channel(s) {missing}; have {sorted(trials.channels)}")
+    return path, trials
 
 
 def _read_trials(path: Path) -> TrialSet:

@@ -66,26 +66,9 @@ def load_cart_trials(path: Path):
     Raises:
         DataError: no single ``.h5`` file, a missing channel, or values outside the units' ranges.
     """
-    from armlab.data.h5io import read_trials
+    from armlab.data.h5io import read_trial_file
 
-    path = Path(path)
-    if path.is_dir():
-        files = sorted(path.glob("*.h5"))
-        if len(files) != 1:
-            raise DataError(
-                f"{path} holds {len(files)} .h5 files; give the trial file itself or a run folder "
-                "with exactly one (trials.h5)"
-            )
-        path = files[0]
-    if path.suffix != ".h5":
-        raise DataError(
-            f"{path.name}: the cartesian_online diagnosis reads armlab trial files (.h5, "
-            "docs/trial_format.md); valid: a trials.h5 file or its run folder"
-        )
-    trials = read_trials(path)
-    missing = [c for c in _REQUIRED if c not in trials.channels]
-    if missing:
-        raise DataError(f"{path.name} lacks channel(s) {missing}; have {sorted(trials.channels)}")
+    path, trials = read_trial_file(path, _REQUIRED, "the cartesian_online diagnosis")
     checked = [("hand_pos", _MAX_HAND_POS_M), ("ref_pos", _MAX_HAND_POS_M), ("hand_force", _MAX_HAND_FORCE_N)]
     if "hand_vel" in trials.channels:
         checked.append(("hand_vel", _MAX_HAND_VEL_M_S))

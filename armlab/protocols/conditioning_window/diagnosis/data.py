@@ -152,26 +152,9 @@ class CondSet:
 
 def load_cond_trials(path: Path):
     """Read a conditioning-window trial file (or the run folder that holds ``trials.h5``)."""
-    from armlab.data.h5io import read_trials
+    from armlab.data.h5io import read_trial_file
 
-    path = Path(path)
-    if path.is_dir():
-        files = sorted(path.glob("*.h5"))
-        if len(files) != 1:
-            raise DataError(
-                f"{path} holds {len(files)} .h5 files; give the trial file itself or a run folder "
-                "with exactly one (trials.h5)"
-            )
-        path = files[0]
-    if path.suffix != ".h5":
-        raise DataError(
-            f"{path.name}: the conditioning_window diagnosis reads armlab trial files (.h5, "
-            "docs/trial_format.md); valid: a trials.h5 file or its run folder"
-        )
-    trials = read_trials(path)
-    missing = [c for c in _REQUIRED if c not in trials.channels]
-    if missing:
-        raise DataError(f"{path.name} lacks channel(s) {missing}; have {sorted(trials.channels)}")
+    path, trials = read_trial_file(path, _REQUIRED, "the conditioning_window diagnosis")
     for key in ("arm_l1_m", "arm_l2_m"):
         if key not in trials.attrs:
             raise DataError(
