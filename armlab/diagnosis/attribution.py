@@ -91,6 +91,10 @@ class Selection:
     indistinct: list[dict]
     partial: list[str]
 
+    def ranking_steps(self) -> list[list[dict]]:
+        """The rankings without their fitted models (what results.json stores per greedy step)."""
+        return [[{k: v for k, v in e.items() if k != "model"} for e in r] for r in self.rankings]
+
 
 def _separating_trial(a: str, b: str) -> str:
     for x, y in ((a, b), (b, a)):

@@ -136,7 +136,7 @@ def diagnose_cart(trials, cfg: DiagnosisConfig) -> tuple[dict, dict]:
         family=CART_FAMILY,
     )
     stages = [_stage(cs, y, m, floor) for m in sel.stages]
-    strip = [[{k: v for k, v in e.items() if k != "model"} for e in r] for r in sel.rankings]
+    strip = sel.ranking_steps()
     results = {
         "protocol": "cartesian_online",
         "settings": asdict(cfg),

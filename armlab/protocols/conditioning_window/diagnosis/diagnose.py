@@ -147,7 +147,7 @@ def diagnose_cond(trials, cfg: DiagnosisConfig) -> tuple[dict, dict]:
     )
     measured_ident = _identify(cs, y)
     stages = [_stage(cs, y, m, measured_ident, floor) for m in sel.stages]
-    strip = [[{k: v for k, v in e.items() if k != "model"} for e in r] for r in sel.rankings]
+    strip = sel.ranking_steps()
     results = {
         "protocol": "conditioning_window",
         "settings": asdict(cfg),

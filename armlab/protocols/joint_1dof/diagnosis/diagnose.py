@@ -238,7 +238,8 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
         {**_stage(m, trials, y_band, noise, floor, sign, frf_meas), "effects": label}
         for m, label in zip(models, labels, strict=True)
     ]
-    ranking = [{k: v for k, v in e.items() if k != "model"} for e in sel.rankings[0]] if sel.rankings else []
+    steps = sel.ranking_steps()
+    ranking = steps[0] if steps else []
     verdict, partial = sel.verdict, sel.partial
     if tv:
         # the time-varying nominal is the first accepted effect: the core's rule for the effects
@@ -253,7 +254,7 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
     results = {
         "verdict": verdict,
         "ranking": ranking,
-        "ranking_steps": [[{k: v for k, v in e.items() if k != "model"} for e in r] for r in sel.rankings],
+        "ranking_steps": steps,
         "gap": {
             "metric": "held-out residual power / measured power in the scoring band (1 - VAF)",
             "nominal": stages[0]["held_out_gap"],
