@@ -173,6 +173,7 @@ from armlab.estimation.stiffness_trials import (
     interval_mean,
     quat_to_rot,
     wrench_on_limb,
+    wrist_from_marker,
 )
 from armlab.estimation.virtual_force import (
     ArmFit,
@@ -323,5 +324,6 @@ __all__ = [
     "condition_stiffness",
     "interval_mean",
     "quat_to_rot",
+    "wrist_from_marker",
     "wrench_on_limb",
 ]

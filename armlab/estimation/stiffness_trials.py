@@ -30,6 +30,7 @@ __all__ = [
     "condition_stiffness",
     "interval_mean",
     "quat_to_rot",
+    "wrist_from_marker",
     "wrench_on_limb",
 ]
 
@@ -64,6 +65,16 @@ def quat_to_rot(quat: np.ndarray) -> np.ndarray:
         ],
         axis=-2,
     )
+
+
+def wrist_from_marker(
+    rot_m: np.ndarray, pos_m: np.ndarray, marker_to_wrist: tuple[np.ndarray, np.ndarray]
+) -> tuple[np.ndarray, np.ndarray]:
+    """The wrist frame (rotations (n, 3, 3), positions (n, 3) m) carried by the forearm cluster at
+    ``rot_m`` (n, 3, 3), ``pos_m`` (n, 3) m, with the wrist's (rotation (3, 3), offset (3,) m) in
+    the cluster's frame (measured once by the lab)."""
+    r_off, p_off = (np.asarray(a, dtype=float) for a in marker_to_wrist)
+    return rot_m @ r_off, pos_m + np.einsum("nij,j->ni", rot_m, p_off)
 
 
 def chordal_mean_rotation(rot: np.ndarray) -> np.ndarray:
@@ -177,7 +188,6 @@ def condition_stiffness(
         q_guess_pre, q_guess_post: (N, 5) rad IK starts (the commanded configurations).
         pre_interval, post_interval: s from the onset.
     """
-    r_off, p_off = (np.asarray(a, dtype=float) for a in marker_to_wrist)
     qs, taus, forces = [], [], []
     for interval, guess in ((pre_interval, q_guess_pre), (post_interval, q_guess_post)):
         sel = (marker_t >= interval[0] - 1e-12) & (marker_t < interval[1] - 1e-12)
@@ -185,8 +195,7 @@ def condition_stiffness(
             raise DataError(f"no marker sample in the interval {interval} s")
         r_m = chordal_mean_rotation(quat_to_rot(marker_quat[:, sel]))
         p_m = marker_pos[:, sel].mean(axis=1)
-        r_w = r_m @ r_off
-        p_w = p_m + np.einsum("nij,j->ni", r_m, p_off)
+        r_w, p_w = wrist_from_marker(r_m, p_m, marker_to_wrist)
         q = inverse_kinematics(kin, r_w, p_w, guess).q
         f = interval_mean(wrist_force, ft_t, interval)
         n = interval_mean(wrist_torque, ft_t, interval)

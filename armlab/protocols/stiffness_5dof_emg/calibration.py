@@ -23,7 +23,7 @@ import numpy as np
 from armlab.errors import DataError
 from armlab.estimation.inverse_kinematics import inverse_kinematics
 from armlab.estimation.joint_centres import joint_centre
-from armlab.estimation.stiffness_trials import quat_to_rot
+from armlab.estimation.stiffness_trials import quat_to_rot, wrist_from_marker
 from armlab.models.arm5_free import Arm5FreeScene
 from armlab.models.arm_5dof import Arm5Dof, limb_kinematics
 from armlab.models.limb_kinematics import LimbKinematics
@@ -157,8 +157,7 @@ def estimate_calibration(
     err_sh = float(np.linalg.norm(kin.shoulder - np.asarray(truth["shoulder_m"], float)))
     err_el = float(np.linalg.norm(kin.elbow_offset - np.asarray(truth["elbow_offset_m"], float)))
     err_wr = float(np.linalg.norm(kin.wrist_offset - np.asarray(truth["wrist_offset_m"], float)))
-    rot_d = rot[held, _FOREARM] @ r_w
-    pos_d = pos[held, _FOREARM] + np.einsum("nij,j->ni", rot[held, _FOREARM], p_w)
+    rot_d, pos_d = wrist_from_marker(rot[held, _FOREARM], pos[held, _FOREARM], (r_w, p_w))
     ik = inverse_kinematics(kin, rot_d, pos_d, np.asarray(q_start, float))
     ik_err = ik.q - true_q[held]
     rms_deg = float(np.degrees(np.sqrt(np.mean(ik_err**2))))

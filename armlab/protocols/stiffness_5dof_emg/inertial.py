@@ -23,7 +23,7 @@ import numpy as np
 from armlab.errors import DataError
 from armlab.estimation.inverse_kinematics import inverse_kinematics
 from armlab.estimation.static_inertial import gravity_torque_from_fit, static_inertial_regression
-from armlab.estimation.stiffness_trials import chordal_mean_rotation, quat_to_rot
+from armlab.estimation.stiffness_trials import chordal_mean_rotation, quat_to_rot, wrist_from_marker
 from armlab.models.arm5_free import Arm5FreeScene
 from armlab.models.arm5_truth import XI_RED_NAMES, gravity_torque
 from armlab.models.arm_5dof import Arm5Dof
@@ -142,9 +142,8 @@ def estimate_inertial(
     conf = np.asarray(_get(inr, "configurations_rad"), float)
     held_out = np.asarray(_get(inr, "held_out_rad"), float)
     truth = _get(inr, "ground_truth")
-    r_w, p_w = (np.asarray(a, float) for a in marker_to_wrist)
     # the IK starts at the configuration the subject was asked to reach (the lab knows it)
-    ik = inverse_kinematics(kin, rot @ r_w, pos + np.einsum("nij,j->ni", rot, p_w), conf)
+    ik = inverse_kinematics(kin, *wrist_from_marker(rot, pos, marker_to_wrist), conf)
     fit = static_inertial_regression(kin, ik.q, wrench)
     g_true = np.asarray(truth["gravity_held_out_Nm"], float)
     g_err = gravity_torque_from_fit(kin, fit.xi_red, held_out) - g_true
