@@ -17,8 +17,10 @@ from typing import TYPE_CHECKING, Literal, get_args
 from armlab.config.schema import ExperimentConfig, ReflexConfig
 from armlab.config.validate import check, check_tuple_lengths, choice
 from armlab.sim.arm5_force_task import A_MIN, PRELOAD_CONDITIONS
+from armlab.sim.arm5_trials import TrialTiming
 
 __all__ = [
+    "trial_timing",
     "BUILT_STAGES",
     "STAGES",
     "CalibrationConfig",
@@ -214,3 +216,16 @@ class Stiffness5dofConfig(ExperimentConfig):
             f"file, the calibration and inertial stages feed them; valid: a subset of "
             f"{list(BUILT_STAGES)} containing 'stiffness'",
         )
+
+
+def trial_timing(cfg: Stiffness5dofConfig) -> TrialTiming:
+    """The trials' record and averaging intervals from ``trials.*`` and ``estimation.*``
+    (ConfigError where the intervals do not fit the record)."""
+    t, e = cfg.trials, cfg.estimation
+    return TrialTiming(
+        pre_s=t.pre_s,
+        rise_s=t.rise_s,
+        hold_s=t.hold_s,
+        pre_interval=tuple(e.pre_interval_s),
+        post_interval=tuple(e.post_interval_s),
+    )

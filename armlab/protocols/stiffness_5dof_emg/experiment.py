@@ -36,14 +36,13 @@ from armlab.models.arm5_truth import analytic_damping, analytic_stiffness, inert
 from armlab.models.arm_5dof import Arm5Dof, limb_kinematics, load_arm_5dof
 from armlab.models.limb_kinematics import LimbKinematics
 from armlab.protocols.stiffness_5dof_emg.calibration import simulate_calibration
-from armlab.protocols.stiffness_5dof_emg.config import Stiffness5dofConfig
+from armlab.protocols.stiffness_5dof_emg.config import Stiffness5dofConfig, trial_timing
 from armlab.protocols.stiffness_5dof_emg.inertial import simulate_inertial
 from armlab.sensors.presets import Arm5SensorSuite
 from armlab.sim.arm5_force_task import PRELOAD_CONDITIONS, force_task_activations
 from armlab.sim.arm5_measure import MARKER_RATE_HZ, measure_stiffness_record
 from armlab.sim.arm5_reflex import reflex_stiffness_fd
 from armlab.sim.arm5_trials import (
-    TrialTiming,
     plan_stiffness_trials,
     simulate_stiffness_trials,
 )
@@ -131,13 +130,7 @@ def simulate_stiffness_stage(cfg: Stiffness5dofConfig, lab: StiffnessLab | None 
     acts = np.array([force_task_activations(arm, arm.q0, f, tc.a_min).activation for f in forces])
     rng = np.random.default_rng(cfg.seed)
     plan = plan_stiffness_trials(len(names), tc.n_per_condition, rng, tuple(tc.wait_s))
-    timing = TrialTiming(
-        pre_s=tc.pre_s,
-        rise_s=tc.rise_s,
-        hold_s=tc.hold_s,
-        pre_interval=tuple(cfg.estimation.pre_interval_s),
-        post_interval=tuple(cfg.estimation.post_interval_s),
-    )
+    timing = trial_timing(cfg)
     record = simulate_stiffness_trials(
         scene, kin, arm.q0, acts, plan, timing, tc.amplitude_rad, settle_s=cfg.sim.settle_s, reflex=cfg.reflex
     )

@@ -13,9 +13,8 @@ from armlab.config.validate import check
 from armlab.errors import ConfigError
 from armlab.models.arm5_scene import ARM5_LAB_TIMESTEP_S
 from armlab.models.arm_5dof import load_arm_5dof
-from armlab.protocols.stiffness_5dof_emg.config import Stiffness5dofConfig
+from armlab.protocols.stiffness_5dof_emg.config import Stiffness5dofConfig, trial_timing
 from armlab.sim.arm5_force_task import PRELOAD_CONDITIONS, force_task_activations
-from armlab.sim.arm5_trials import TrialTiming
 
 __all__ = ["LAB_FS_HZ", "LAB_INTEGRATOR", "validate"]
 
@@ -42,20 +41,14 @@ def validate(cfg: Stiffness5dofConfig) -> None:
         f"sim.integrator={cfg.sim.integrator!r}: the lab's robot servos need {LAB_INTEGRATOR!r}; "
         f"valid: [{LAB_INTEGRATOR!r}]",
     )
-    t, e = cfg.trials, cfg.estimation
     try:
-        TrialTiming(
-            pre_s=t.pre_s,
-            rise_s=t.rise_s,
-            hold_s=t.hold_s,
-            pre_interval=tuple(e.pre_interval_s),
-            post_interval=tuple(e.post_interval_s),
-        )
+        trial_timing(cfg)
     except ConfigError as exc:
         raise ConfigError(
             f"estimation.pre_interval_s / post_interval_s do not fit the record set by trials.pre_s, "
             f"rise_s, hold_s: {exc}"
         ) from None
+    t = cfg.trials
     arm = load_arm_5dof()
     for name in t.conditions:  # each pre-load must be holdable with activations in [a_min, 1]
         try:
