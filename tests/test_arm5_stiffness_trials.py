@@ -109,21 +109,16 @@ def test_the_arm_follows_the_planned_displacement():
     assert np.abs(RECORD.commanded_dq).max() == AMPLITUDE_RAD
 
 
-@pytest.mark.parametrize(("preset", "tolerance"), [("ideal", 0.05), ("realistic", 0.12)])
+# spec 001 check 5 allows 5 % (ideal) and 12 % (realistic). The ideal-sensor error is only the
+# residual motion in the post-interval (measured 0.1-0.3 %): 1 % is a guard far inside 5 % that
+# fails on any systematic mapping error
+@pytest.mark.parametrize(("preset", "tolerance"), [("ideal", 0.01), ("realistic", 0.12)])
 def test_check_5_joint_stiffness_per_condition(preset, tolerance):
     for c, est in enumerate(EST[preset]):
         K_true = analytic_stiffness(ARM, ACTS[c])  # linear muscles: the intrinsic truth, exact
         err = relative_error(est.estimate.K, K_true)
-        assert err < tolerance, (NAMES[c], err)  # spec 001 check 5
+        assert err < tolerance, (NAMES[c], err)
         assert est.estimate.spd.eigenvalues.min() > 0  # SPD in every condition
-    # the ideal-sensor error is only the residual motion in the post-interval (< 1 %, measured
-    # 0.1-0.3 %): a guard far inside the spec's 5 % that fails on any systematic mapping error
-    if preset == "ideal":
-        errs = [
-            relative_error(e.estimate.K, analytic_stiffness(ARM, a))
-            for e, a in zip(EST[preset], ACTS, strict=True)
-        ]
-        assert max(errs) < 0.01
 
 
 def test_check_6_gravity_ablation():
