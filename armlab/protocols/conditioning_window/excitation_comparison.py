@@ -17,15 +17,16 @@ from dataclasses import replace
 import numpy as np
 
 from armlab.config.schema import ScenarioConfig
+from armlab.estimation.criteria import first_satisfied
 from armlab.protocols.conditioning_window.config import ConditioningWindowConfig
 from armlab.protocols.conditioning_window.design_limits import check_robot_torque
 from armlab.protocols.conditioning_window.experiment import estimate_protocol, simulate_protocol, window_specs
+from armlab.protocols.conditioning_window.window_sweep import CRITERIA
 
 __all__ = ["ERROR_KEYS", "compare_excitations", "run_excitation"]
 
 #: results.json keys of the relative Frobenius errors against the intrinsic truth.
 ERROR_KEYS = ("K_rel_err", "D_rel_err", "xi_rel_err")
-_CRITERIA = ("K_pd_from_s", "symmetric_from_s", "constant_from_s")
 
 
 def run_excitation(cfg: ConditioningWindowConfig, scenario: str, k_values: list[int] | None = None) -> dict:
@@ -49,13 +50,11 @@ def _summary(runs: list[dict]) -> dict:
     for key in ("cond", *ERROR_KEYS):
         x = np.array([r[key] for r in runs])
         out[key] = {"median": np.median(x, 0).tolist(), "min": x.min(0).tolist(), "max": x.max(0).tolist()}
-    out["criteria"] = {c: [r["criteria"][c] for r in runs] for c in _CRITERIA}
+    out["criteria"] = {c: [r["criteria"][c] for r in runs] for c in CRITERIA}
     out["robot_tau_peak_Nm"] = np.max([r["robot_tau_peak_Nm"] for r in runs], axis=0).tolist()
-    within = np.array([[max(r[k][i] for k in ERROR_KEYS) <= 0.10 for i in range(len(t))] for r in runs])
+    err = np.array([[r[k] for k in ERROR_KEYS] for r in runs])  # (seeds, 3, windows)
     # the first window from which K, D and xi are all within 10 % of the intrinsic truth on every seed
-    ok = within.all(axis=0)
-    held = [i for i in range(len(t)) if ok[i:].all()]
-    out["all_within_10pct_from_s"] = t[held[0]] if held else None
+    out["all_within_10pct_from_s"] = first_satisfied(np.asarray(t), (err.max(axis=1) <= 0.10).all(axis=0))
     out["best_max_err"] = float(np.min(np.max([out[k]["median"] for k in ERROR_KEYS], axis=0)))
     return out
 
