@@ -59,7 +59,8 @@ class WindowSpec:
 
 def window_specs(scenario: Scenario, estimator: EstimatorConfig) -> list[WindowSpec]:
     """The paper's windows (T_obs = T_k + 70 ms) plus the scenario's extension windows, in order
-    of T_obs (a designed scenario's extension windows may be shorter than its T_k + extra).
+    of T_obs. Extension windows longer than the last paper window are kept; shorter ones only in a
+    single-group scenario (a designed one, whose one T_k has no other group's windows below it).
 
     With ``estimator.t_obs_s`` set, those windows are used on the longest-T_k group instead.
     """
@@ -74,10 +75,11 @@ def window_specs(scenario: Scenario, estimator: EstimatorConfig) -> list[WindowS
         for k, tk, to in zip(scenario.k_values, scenario.t_k_s, scenario.t_obs_s, strict=True)
     ]
     last = specs[-1]
+    single_group = len(specs) == 1
     specs += [
         WindowSpec(k=last.k, t_k_s=last.t_k_s, t_obs_s=float(t), extension=True)
         for t in scenario.extension_t_obs_s
-        if t > last.t_obs_s or (t < last.t_obs_s and len(specs) == 1)
+        if t > last.t_obs_s or (single_group and t < last.t_obs_s)
     ]
     return sorted(specs, key=lambda s: s.t_obs_s)
 

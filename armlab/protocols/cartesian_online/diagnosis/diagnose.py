@@ -32,9 +32,6 @@ def cart_candidates(cfg: DiagnosisConfig) -> list[str]:
     return select_candidates(cfg, CART_SURROGATES, "cartesian_online")
 
 
-_gap = masked_gap
-
-
 def _trial_major(cs: CartSet, rows: np.ndarray) -> np.ndarray:
     """Scoring rows -> (m, n, 2), zero on the padding."""
     out = np.zeros((*cs.valid.shape, 2))
@@ -48,19 +45,19 @@ def _breakdowns(cs: CartSet, y: np.ndarray, resid: np.ndarray) -> dict:
     t_ms = 1000.0 * cs.row_time_s
     row_stop, row_phase = cs.stop[cs.row_trial], cs.phase[cs.row_trial]
     windows = [
-        {"window_ms": [lo, hi], **_gap(resid, y, noise, held & (t_ms >= lo) & (t_ms < hi))}
+        {"window_ms": [lo, hi], **masked_gap(resid, y, noise, held & (t_ms >= lo) & (t_ms < hi))}
         for lo, hi in WINDOWS_MS
     ]
     channels = [
-        {"channel": "hand_force", "axis": a, **_gap(resid, y, noise, held & (cs.row_axis == j))}
+        {"channel": "hand_force", "axis": a, **masked_gap(resid, y, noise, held & (cs.row_axis == j))}
         for j, a in enumerate(AXES)
     ]
     sequences = [
-        {"sequence": int(s), **_gap(resid, y, noise, held & (row_stop == s))}
+        {"sequence": int(s), **masked_gap(resid, y, noise, held & (row_stop == s))}
         for s in np.unique(cs.stop[cs.held_trials])
     ]
     phases = [
-        {"perturbation": str(ph), **_gap(resid, y, noise, held & (row_phase == ph))}
+        {"perturbation": str(ph), **masked_gap(resid, y, noise, held & (row_phase == ph))}
         for ph in np.unique(cs.phase)
     ]
     r3, y3 = _trial_major(cs, resid)[cs.held_trials], _trial_major(cs, y)[cs.held_trials]

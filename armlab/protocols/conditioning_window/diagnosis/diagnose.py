@@ -36,25 +36,23 @@ def cond_candidates(cfg: DiagnosisConfig) -> list[str]:
     return select_candidates(cfg, COND_SURROGATES, "conditioning_window")
 
 
-_gap = masked_gap
-
-
 def _breakdowns(cs: CondSet, y: np.ndarray, resid: np.ndarray) -> dict:
     """Held-out gap by window after onset, joint, perturbation direction and frequency band."""
     noise = cs.row_noise_var
     t_ms = 1000.0 * cs.row_time_s
     held = cs.held
     windows = [
-        {"window_ms": [lo, hi], **_gap(resid, y, noise, held & (t_ms >= lo) & (t_ms < hi))}
+        {"window_ms": [lo, hi], **masked_gap(resid, y, noise, held & (t_ms >= lo) & (t_ms < hi))}
         for lo, hi in WINDOWS_MS
     ]
     channels = [
-        {"channel": "torque", "axis": name, **_gap(resid, y, noise, held & (cs.row_channel == j))}
+        {"channel": "torque", "axis": name, **masked_gap(resid, y, noise, held & (cs.row_channel == j))}
         for j, name in enumerate(CHANNELS)
     ]
     row_dir = cs.direction[cs.row_trial]
     conditions = [
-        {"direction": int(d), **_gap(resid, y, noise, held & (row_dir == d))} for d in np.unique(cs.direction)
+        {"direction": int(d), **masked_gap(resid, y, noise, held & (row_dir == d))}
+        for d in np.unique(cs.direction)
     ]
     # bands: spectra of the held-out trials' 0-400 ms residual and measured torque (Hann window)
     shape = (cs.n_trials, cs.n_window, 2)
