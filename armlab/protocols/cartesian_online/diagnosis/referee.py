@@ -221,7 +221,6 @@ def make_cart_dataset(
         moved = np.moveaxis(force, 1, 0).reshape(force.shape[1], -1)
         tt = np.arange(force.shape[1]) / 1000.0
         force = np.moveaxis(shift_columns(tt, moved, d).reshape(force.shape[1], force.shape[0], 2), 0, 1)
-    effect_force = force
     noisy = force + ref.force_noise_N * rng.standard_normal(force.shape)
 
     def trialset(pos, f):
@@ -239,12 +238,13 @@ def make_cart_dataset(
         x = cart_columns(cs, (), {})
         return cs.y - x @ np.linalg.lstsq(x, cs.y, rcond=None)[0], cs.y
 
-    r_eff, y_eff = residual(clean_pos, effect_force)
+    r_eff, y_eff = residual(clean_pos, force)
     r_nom, _ = residual(nominal[0], nominal[1])
     _, y_noisy = residual(clean_pos, noisy)
     noise_rms = float(np.sqrt(np.mean((y_noisy - y_eff) ** 2)))
-    unabsorbed = float(np.sqrt(np.mean((r_eff - r_nom) ** 2))) if hidden else 0.0
-    effect_rms = float(np.sqrt(np.mean((effect_force - nominal[1]) ** 2))) if hidden else 0.0
+    # with nothing hidden the effect's paths are the nominal's, so both are exactly 0
+    unabsorbed = float(np.sqrt(np.mean((r_eff - r_nom) ** 2)))
+    effect_rms = float(np.sqrt(np.mean((force - nominal[1]) ** 2)))
     folder.mkdir(parents=True, exist_ok=False)
     write_trials(folder / "trials.h5", trialset(clean_pos, noisy))
     truth = {
