@@ -138,16 +138,81 @@ def _serial_reference(lab, targets: np.ndarray, base: np.ndarray, reflex: Reflex
     return np.concatenate(out, axis=1)[:, SUBSTEPS - 1 :: SUBSTEPS]
 
 
-@pytest.mark.parametrize("nthread", [1, 2])
-def test_pipelined_chunks_equal_a_plain_serial_loop(lab, nthread):
-    # the chunks step on a worker thread into two alternating buffer sets while the previous
-    # chunk's samples are kept and the next robot controls are written: the record must equal a
-    # plain loop's bit for bit (0.2 s = five 35 ms reflex chunks and a shorter last one)
-    targets = _ramped_targets(lab)
+def _five_ramps(lab) -> np.ndarray:
+    """Five trials whose targets ramp differently (joints 1-3, both signs, three rates)."""
+    t = np.arange(N_STEPS) * DT
+    targets = _hold_targets(lab, 5)
+    for i, (joint, rate) in enumerate([(0, 2.0), (1, -2.0), (2, 1.0), (0, -1.0), (1, 3.0)]):
+        targets[i, :, joint] += rate * t**2
+    return targets
+
+
+@pytest.mark.parametrize(("nthread", "n_trials"), [(1, 2), (2, 2), (2, 5), (3, 5)])
+def test_shared_out_trials_equal_a_plain_serial_loop(lab, nthread, n_trials):
+    # each thread steps its own contiguous share of the trials (shares of 1, 2 or 3 trials, one
+    # trial alone included), keeping its samples between its chunks: the record must equal a plain
+    # loop over all trials bit for bit (0.2 s = five 35 ms reflex chunks and a shorter last one)
+    targets = _ramped_targets(lab) if n_trials == 2 else _five_ramps(lab)
     base, reflex = lab.hold.activation, ReflexConfig()
     res = simulate(lab.scene, lab.hold.state, targets, base, reflex, substeps=SUBSTEPS, nthread=nthread)
     assert_array_equal(res.sensordata, _serial_reference(lab, targets, base, reflex))
-    assert not np.array_equal(res.qpos[0], res.qpos[1])  # the two trials differ
+    assert not np.array_equal(res.qpos[0], res.qpos[1])  # the trials differ
+
+
+def test_kept_part_equals_the_same_columns_of_everything(lab):
+    from armlab.sim.rollout import Kept
+
+    args = (lab.scene, lab.hold.state, _ramped_targets(lab), lab.hold.activation, ReflexConfig())
+    full = simulate(*args, substeps=SUBSTEPS)
+    names = ("ft_torque", "p_hand", "lwr_q3", "lwr_q2")  # out of the scene's order: kept in it
+    kept = simulate(*args, substeps=SUBSTEPS, kept=Kept(sensors=names, qpos=(1, 0), muscle_ctrl=False))
+    for name in names:
+        assert_array_equal(
+            kept.readout.sensor(kept.sensordata, name), lab.scene.sensor(full.sensordata, name)
+        )
+    assert kept.sensordata.shape[-1] == 3 + 3 + 1 + 1
+    # neighbours in the scene stay neighbours: a view, not a copy
+    both = kept.readout.sensors_of(kept.sensordata, ["lwr_q2", "lwr_q3"])
+    assert both.base is not None
+    assert_array_equal(both, lab.scene.sensors_of(full.sensordata, ["lwr_q2", "lwr_q3"]))
+    assert_array_equal(kept.qpos, full.qpos[..., [1, 0]])  # in the order asked
+    assert kept.muscle_ctrl is None
+    assert_array_equal(kept.activation, full.activation)
+
+
+def test_kept_sensor_the_scene_lacks_is_refused_by_name(lab):
+    from armlab.errors import SimulationError
+    from armlab.sim.rollout import Kept
+
+    with pytest.raises(SimulationError, match=r"\['p_nowhere'\].*valid: \[.*'ft_force'"):
+        simulate(
+            lab.scene,
+            lab.hold.state,
+            _ramped_targets(lab),
+            lab.hold.activation,
+            ReflexConfig(),
+            substeps=SUBSTEPS,
+            kept=Kept(sensors=("ft_force", "p_nowhere")),
+        )
+
+
+def test_the_failure_named_is_the_one_a_check_of_every_row_finds_first():
+    # the shares step independently, so a later share may fail first in wall time; the error must
+    # still name what one check of all rows, chunk by chunk, finds first: the earliest chunk, then
+    # a bad state before a warning alone, then the earliest step, then the lowest row
+    from armlab.sim.rollout import _Stop
+    from armlab.sim.stability import RolloutFailure
+
+    t = np.arange(1, 11) * 1e-3
+    stop = _Stop()
+    stop.fail(3, RolloutFailure(5, 7, "late step"), t)
+    stop.fail(3, RolloutFailure(400, 2, "early step"), t)
+    stop.fail(3, RolloutFailure(None, 10, "warned only"), t)
+    assert stop.first()[0].quantity == "early step" and stop.chunk == 3
+    stop.fail(3, RolloutFailure(1, 2, "same step, lower row"), t)
+    assert stop.first()[0].trial == 1
+    stop.fail(2, RolloutFailure(None, 10, "earlier chunk"), t)
+    assert stop.first()[0].quantity == "earlier chunk" and stop.chunk == 2
 
 
 def test_a_batch_of_no_steps_records_no_samples(lab):

@@ -30,7 +30,7 @@ from armlab.sensors.presets import SensorSuite, measure
 from armlab.sim import _chunk_kernel
 from armlab.sim.hold import HoldState, hand_world, settle
 from armlab.sim.robot_ik import solve_ik
-from armlab.sim.rollout import simulate
+from armlab.sim.rollout import Kept, simulate
 from armlab.sim.stability import TrialLabels, check_bound
 from armlab.sim.subject import fluctuation, sample_commands
 
@@ -120,6 +120,22 @@ class LabRecording:
     truth: GroundTruth
     scene: Scene
     hold: HoldState
+
+
+_ARM_POINTS = tuple(f"p_{s}" for s in ("shoulder_site", "elbow_site", "hand"))
+_ROBOT_POINTS = tuple(f"p_{b}" for b in ROBOT_POINTS) + ("p_flange",)
+_ENCODERS = tuple(f"lwr_q{i}" for i in range(1, 8))
+_TORQUES = tuple(f"lwr_tau{i}" for i in range(1, 8))
+
+
+def _kept(scene: Scene) -> Kept:
+    """What the lab reads of every sample: the sensors its channels come from (not the muscle
+    lengths and velocities, which only the reflex reads, nor the commands) and the arm's angles."""
+    return Kept(
+        sensors=(*_ARM_POINTS, *_ROBOT_POINTS, *_ENCODERS, *_TORQUES, "ft_force", "ft_torque"),
+        qpos=tuple(int(a) for a in scene.arm_qpos),
+        muscle_ctrl=False,
+    )
 
 
 def load_compiled() -> None:
@@ -259,13 +275,14 @@ def record_trials(
             substeps=substeps,
             who=who,
             target_rows=path_of,
+            kept=_kept(scene),
         )
         loaded.result()
 
-    sd = sim.sensordata
+    sd, readout = sim.sensordata, sim.readout
     check_bound(
         who,
-        scene.sensor(sd, "ft_force"),
+        readout.sensor(sd, "ft_force"),
         (np.arange(n_samples) + 1) / fs,
         CUFF_FORCE_BOUND_N,
         "cuff force",
@@ -273,20 +290,20 @@ def record_trials(
         "no arm perturbation applies it; valid runs stay below 50 N",
     )
 
-    # the noiseless channels and the sensors' inputs: views of the sensor data where the sensors lie
-    # side by side in it (Scene.sensors_of), no copies
+    # the noiseless channels and the sensors' inputs: views of the kept sensor data where the
+    # sensors lie side by side in it (KeptSensors.sensors_of), no copies
     true = {
-        "true_arm_q": sim.qpos[..., scene.arm_qpos],
-        "true_hand_pos": (scene.sensor(sd, "p_hand") - scene.shoulder_pos)[..., :2],
+        "true_arm_q": sim.qpos,
+        "true_hand_pos": (readout.sensor(sd, "p_hand") - scene.shoulder_pos)[..., :2],
         "true_activation": sim.activation,
-        "true_arm_points": scene.sensors_of(sd, [f"p_{s}" for s in ("shoulder_site", "elbow_site", "hand")]),
-        "true_robot_points": scene.sensors_of(sd, [f"p_{b}" for b in ROBOT_POINTS] + ["p_flange"]),
+        "true_arm_points": readout.sensors_of(sd, _ARM_POINTS),
+        "true_robot_points": readout.sensors_of(sd, _ROBOT_POINTS),
     }
     clean = {
-        "robot_q": scene.sensors_of(sd, [f"lwr_q{i}" for i in range(1, 8)]),
-        "robot_tau": scene.sensors_of(sd, [f"lwr_tau{i}" for i in range(1, 8)]),
-        "ft_force": _force_effects(scene.sensor(sd, "ft_force"), cfg.effects, fs),
-        "ft_torque": _force_effects(scene.sensor(sd, "ft_torque"), cfg.effects, fs),
+        "robot_q": readout.sensors_of(sd, _ENCODERS),
+        "robot_tau": readout.sensors_of(sd, _TORQUES),
+        "ft_force": _force_effects(readout.sensor(sd, "ft_force"), cfg.effects, fs),
+        "ft_torque": _force_effects(readout.sensor(sd, "ft_torque"), cfg.effects, fs),
     }
     suite = SensorSuite.realistic() if cfg.sensors.preset == "realistic" else SensorSuite.ideal()
     # drift accumulates from taring, before the random wait

@@ -32,9 +32,12 @@ from armlab.sim._chunk_kernel import first_bad_step
 
 __all__ = [
     "WATCHED_WARNINGS",
+    "RolloutFailure",
     "TrialLabels",
     "check_bound",
     "check_rollout",
+    "failure_error",
+    "rollout_failure",
     "warning_counts",
 ]
 
@@ -93,6 +96,69 @@ def warning_counts(datas: Sequence[mujoco.MjData]) -> dict[str, int]:
     return out
 
 
+@dataclass(frozen=True)
+class RolloutFailure:
+    """What :func:`rollout_failure` found wrong in a chunk.
+
+    Attributes:
+        trial: the row of the first trial whose state went bad (earliest step, then lowest row);
+            None when MuJoCo only warned (a full constraint buffer: the chunk, not a trial).
+        step: the step of the chunk where it went bad (the chunk's length for a warning alone).
+        quantity: what went wrong, for :meth:`TrialLabels.error`.
+    """
+
+    trial: int | None
+    step: int
+    quantity: str
+
+    @property
+    def order(self) -> tuple[int, int, int]:
+        """Sorts failures as one check of all their rows would pick: a bad state before a warning
+        alone, then the earliest step, then the lowest row."""
+        if self.trial is None:
+            return (1, self.step, 0)
+        return (0, self.step, self.trial)
+
+
+def rollout_failure(
+    state_in: np.ndarray,
+    states: np.ndarray,
+    dt: float,
+    warned: Mapping[str, int],
+) -> RolloutFailure | None:
+    """The failure of one ``mujoco.rollout`` chunk (see :func:`check_rollout`), or None.
+
+    Args:
+        state_in: (n_trials, nstate) full-physics states the chunk started from.
+        states: (n_trials, m, nstate) full-physics states after each step (rollout's output).
+        dt: s, physics step.
+        warned: :func:`warning_counts` of the rollout's MjData read right after the chunk.
+    """
+    # the sound chunk, by far the common case, in one compiled pass without temporaries
+    if (
+        not warned
+        and first_bad_step(np.ascontiguousarray(state_in[:, 0]), np.ascontiguousarray(states), dt) < 0
+    ):
+        return None
+    expected = state_in[:, :1] + dt * np.arange(1, states.shape[1] + 1)
+    bad = ~np.isfinite(states).all(axis=-1) | (np.abs(states[..., 0] - expected) > 0.5 * dt)
+    if bad.any():
+        first = np.where(bad.any(axis=1), bad.argmax(axis=1), states.shape[1])
+        trial = int(np.argmin(first))
+        what = "the state became non-finite or MuJoCo reset it (its acceleration diverged)"
+        return RolloutFailure(
+            trial, int(first[trial]), f"{what}{'; MuJoCo warned ' + str(warned) if warned else ''}"
+        )
+    # a warning that did not reset the state (a full constraint buffer): the chunk, not the trial
+    return RolloutFailure(None, states.shape[1], f"MuJoCo warned {dict(warned)} by this time")
+
+
+def failure_error(who: TrialLabels, failure: RolloutFailure, t_steps: np.ndarray) -> SimulationError:
+    """The :class:`SimulationError` of ``failure`` (its trial a row of ``who``), at the time of its
+    step in ``t_steps`` (m,) s (the chunk's last step for a warning alone)."""
+    return who.error(failure.trial, float(t_steps[min(failure.step, len(t_steps) - 1)]), failure.quantity)
+
+
 def check_rollout(
     who: TrialLabels,
     state_in: np.ndarray,
@@ -120,25 +186,9 @@ def check_rollout(
         SimulationError: a trial's state was reset by MuJoCo (its clock jumps back), became
             non-finite, or MuJoCo warned.
     """
-    if warned is None:
-        warned = warning_counts(datas)
-    # the sound chunk, by far the common case, in one compiled pass without temporaries
-    if (
-        not warned
-        and first_bad_step(np.ascontiguousarray(state_in[:, 0]), np.ascontiguousarray(states), dt) < 0
-    ):
-        return
-    expected = state_in[:, :1] + dt * np.arange(1, states.shape[1] + 1)
-    bad = ~np.isfinite(states).all(axis=-1) | (np.abs(states[..., 0] - expected) > 0.5 * dt)
-    if bad.any():
-        first = np.where(bad.any(axis=1), bad.argmax(axis=1), states.shape[1])
-        trial = int(np.argmin(first))
-        step = int(first[trial])
-        what = "the state became non-finite or MuJoCo reset it (its acceleration diverged)"
-        quantity = f"{what}{'; MuJoCo warned ' + str(warned) if warned else ''}"
-        raise who.error(trial, float(t_steps[step]), quantity)
-    # a warning that did not reset the state (a full constraint buffer): the chunk, not the trial
-    raise who.error(None, float(t_steps[-1]), f"MuJoCo warned {warned} by this time")
+    failure = rollout_failure(state_in, states, dt, warning_counts(datas) if warned is None else warned)
+    if failure is not None:
+        raise failure_error(who, failure, t_steps)
 
 
 def check_bound(
