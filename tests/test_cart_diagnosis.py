@@ -6,6 +6,7 @@ the referee's MuJoCo lab), so the truth of every hidden effect is known.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 
 import numpy as np
@@ -18,7 +19,12 @@ from armlab.diagnosis.scoring import expected_verdict
 from armlab.errors import ConfigError, DataError
 from armlab.models.cartesian_field import THESIS_FIELD, quadratic_basis
 from armlab.protocols.cartesian_online.config import CartesianOnlineConfig, SimulationConfig
-from armlab.protocols.cartesian_online.diagnosis.data import MIN_FLOOR, load_cart_trials, prepare_cart
+from armlab.protocols.cartesian_online.diagnosis.data import (
+    MIN_FLOOR,
+    load_cart_trials,
+    prepare_cart,
+    white_noise_var,
+)
 from armlab.protocols.cartesian_online.diagnosis.diagnose import cart_candidates, diagnose_cart
 from armlab.protocols.cartesian_online.diagnosis.models import cubic_basis
 from armlab.protocols.cartesian_online.diagnosis.referee import (
@@ -29,6 +35,8 @@ from armlab.protocols.cartesian_online.diagnosis.referee import (
     make_cart_dataset,
 )
 from armlab.protocols.cartesian_online.experiment import CHANNEL_UNITS, _timeline, case_trials
+from armlab.sensors.channel import apply_channel
+from armlab.sensors.presets import JR3_FORCE
 from armlab.sim.cartesian_level_a import simulate_level_a
 
 NOISE_N = 0.3  # N, the referee's white F/T noise (RefereeConfig.force_noise_N)
@@ -70,6 +78,24 @@ def test_noise_floor_and_nominal_field_on_the_thesis_generator():
     np.testing.assert_allclose(clean.delta0, THESIS_FIELD.delta, rtol=1e-2)
     assert sorted(set(clean.phase)) == ["+x", "+x-y", "-y"]
     assert set(np.unique(clean.stop[clean.held_trials])) == {1, 4, 7, 10}
+
+
+@pytest.mark.parametrize("noise_n", [0.006, 0.0122, 0.05])  # N: half a count, one count, the JR3 preset's
+def test_noise_floor_of_the_jr3_model_low_passed_and_quantised(noise_n):
+    # the JR3 model (125 Hz filter, 1 ms delay, white noise, 0.0122 N steps; its per-trial offset
+    # and drift left out: they are not white) on the thesis's force; the truth is the white noise
+    # plus the quantisation's step²/12 (Sheppard). Measured 0.98-1.09 x over these levels and
+    # seeds 0-3: the filter spreads each triangle corner over ~5 samples, some of which stay in
+    # the kept 90 %; 12 % allows for that bias and the 1.7 % sampling error
+    spec = dataclasses.replace(JR3_FORCE, bias_std=0.0, drift_per_s=0.0, noise_std=noise_n)
+    clean = np.asarray(_level_a(0.0).channels["hand_force"])
+    f = apply_channel(clean, 1000.0, spec, np.random.default_rng(0))
+    truth = noise_n**2 + spec.quant_step**2 / 12
+    np.testing.assert_allclose(white_noise_var(f, np.ones(f.shape[:2], bool)), truth, rtol=0.12)
+    # the median the floor used before lies on the grid k²·step²: 1.40 x the truth at one count
+    d2 = np.diff(f, 2, axis=1).reshape(-1, 2)
+    if noise_n == 0.0122:
+        assert np.all(np.median(d2**2, axis=0) / (6 * 0.4549364) > 1.3 * truth)
 
 
 def test_the_thesis_generator_without_noise_is_none():

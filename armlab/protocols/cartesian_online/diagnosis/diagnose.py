@@ -146,8 +146,8 @@ def diagnose_cart(trials, cfg: DiagnosisConfig) -> tuple[dict, dict]:
             "nominal": stages[0]["held_out_gap"],
             "added": [{"effects": s["effects"], "held_out_gap": s["held_out_gap"]} for s in stages[1:]],
             "noise_floor": floor,
-            "noise_source": "second differences of the raw force (white noise assumed), median per axis, "
-            "through the band's zero-phase filter",
+            "noise_source": "second differences of the raw force (white noise assumed), trimmed mean "
+            "per axis, through the band's zero-phase filter",
         },
         "where": {
             "windows": stages[0]["windows"],
