@@ -186,3 +186,17 @@ def test_designed_window_in_the_lab_seed0():
     i = r["t_obs_s"].index(0.12)
     assert r["K_rel_err"][i] > 10.0
     assert np.all(np.array(r["robot_tau_peak_Nm"]) < LWR_TORQUE_LIMIT_NM)
+
+
+def test_planning_follows_the_labs_model_effects():
+    # joint friction settles the arm elsewhere (0.5 N·m Coulomb: ~3 mrad at the elbow); the design
+    # must plan at the operating point the lab will simulate, not the frictionless one
+    from armlab.config.effects import EffectsConfig, JointFriction
+    from armlab.sim.lab import settled_scene
+
+    cfg = ConditioningWindowConfig()
+    rough = replace(cfg, effects=EffectsConfig(joint_friction=JointFriction(coulomb_Nm=0.5)))
+    _, _, truth = settled_scene(rough)
+    planned = planning_model(rough).q0
+    np.testing.assert_array_equal(planned, truth.q_op)
+    assert np.max(np.abs(planned - planning_model(cfg).q0)) > 1e-3

@@ -42,6 +42,7 @@ __all__ = [
     "load_compiled",
     "record_trials",
     "robot_target_paths",
+    "settled_scene",
 ]
 
 PATH_POINTS = 41  # IK points along each direction's hand path (spline-interpolated in between)
@@ -64,6 +65,16 @@ def _apply_model_effects(scene: Scene, effects: EffectsConfig) -> None:
     """Coulomb friction (MuJoCo ``frictionloss``, N·m) at the shoulder and elbow."""
     if effects.joint_friction is not None:
         scene.model.dof_frictionloss[scene.arm_dof] = effects.joint_friction.coulomb_Nm
+
+
+def settled_scene(cfg: ExperimentConfig) -> tuple[Scene, HoldState, GroundTruth]:
+    """The lab's scene as :func:`record_trials` simulates it: composed from ``cfg``, its model
+    effects applied (joint friction), settled at q0 (the robot's hold), and its ground truth
+    (:func:`armlab.models.ground_truth.ground_truth`, with the cuff when it is compliant)."""
+    scene = build_scene(cfg.arm, cfg.cuff, cfg.robot, cfg.sim)
+    _apply_model_effects(scene, cfg.effects)
+    hold = settle(scene, cfg.arm, cfg.sim.settle_s, protocol=cfg.protocol_name)
+    return scene, hold, ground_truth(scene, hold.state, cfg.cuff.rigid)
 
 
 def _force_effects(z: np.ndarray, effects: EffectsConfig, fs: float) -> np.ndarray:
@@ -228,10 +239,7 @@ def record_trials(
             if active
             else None
         )
-        scene = build_scene(cfg.arm, cfg.cuff, cfg.robot, cfg.sim)
-        _apply_model_effects(scene, cfg.effects)
-        hold = settle(scene, cfg.arm, cfg.sim.settle_s, protocol=cfg.protocol_name)
-        truth = ground_truth(scene, hold.state, cfg.cuff.rigid)
+        scene, hold, truth = settled_scene(cfg)
 
         dt = scene.model.opt.timestep
         substeps = int(round(1.0 / (fs * dt)))

@@ -33,15 +33,13 @@ from scipy.optimize import minimize
 
 from armlab.config import choices
 from armlab.config.validate import check, choice
-from armlab.models.ground_truth import ground_truth
-from armlab.models.scene import build_scene
 from armlab.perturbations.quintic import PAPER_DIRECTIONS
 from armlab.perturbations.segments import QUINTIC_PEAK_ACC, QUINTIC_PEAK_VEL, SegmentWaveform
 from armlab.protocols.conditioning_window.config import ConditioningWindowConfig
 from armlab.protocols.conditioning_window.design_noise import measure_noise
 from armlab.protocols.conditioning_window.planning import PlanningModel, planned_estimate
 from armlab.sensors.presets import SensorSuite
-from armlab.sim.hold import settle
+from armlab.sim.lab import settled_scene
 
 __all__ = [
     "Design",
@@ -144,9 +142,7 @@ def planning_model(
     ``design.noise == "measured"``, the torque noise measured in the lab over ``design.t_obs_s``
     (its generator: the second child of ``default_rng(design.seed)``)."""
     design = DesignConfig() if design is None else design
-    scene = build_scene(cfg.arm, cfg.cuff, cfg.robot, cfg.sim)
-    hold = settle(scene, cfg.arm, cfg.sim.settle_s, protocol=cfg.protocol_name)
-    truth = ground_truth(scene, hold.state, cfg.cuff.rigid)
+    scene, _, truth = settled_scene(cfg)  # the lab's own (its model effects applied)
     suite = SensorSuite.realistic() if cfg.sensors.preset == "realistic" else SensorSuite.ideal()
     noise = float(suite.ft_force.noise_std)
     return PlanningModel(

@@ -15,11 +15,9 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from armlab.errors import ConfigError
-from armlab.models.scene import build_scene
 from armlab.perturbations.scenario import Scenario, TrialPlan, load_scenario
 from armlab.protocols.conditioning_window.config import ConditioningWindowConfig
-from armlab.sim.hold import settle
-from armlab.sim.lab import robot_target_paths
+from armlab.sim.lab import robot_target_paths, settled_scene
 
 __all__ = [
     "LWR_TORQUE_LIMIT_NM",
@@ -94,8 +92,7 @@ def _peaks(cfg: ConditioningWindowConfig, scenario: Scenario, scene, hold) -> tu
 def robot_limits(cfg: ConditioningWindowConfig, scenario: Scenario) -> RobotLimits:
     """The commanded robot trajectory of ``scenario`` in ``cfg``'s lab against the LWR's limits
     (central differences at the physics step of the IK'd targets the lab feeds its servos)."""
-    scene = build_scene(cfg.arm, cfg.cuff, cfg.robot, cfg.sim)
-    hold = settle(scene, cfg.arm, cfg.sim.settle_s, protocol=cfg.protocol_name)
+    scene, hold, _ = settled_scene(cfg)  # the lab's own (its model effects applied)
     vel, acc = _peaks(cfg, scenario, scene, hold)
     paper = load_scenario("conditioning_window")
     fastest = replace(paper, t_k_s=paper.t_k_s[:1], waveform=None)
