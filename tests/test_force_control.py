@@ -191,20 +191,19 @@ def test_concurrent_trials_equal_serial_trials_bit_for_bit():
 
 
 def test_the_kernel_steps_mujoco_as_the_bindings_do():
-    # the compiled kernel calls MuJoCo's C mj_step by name through the model's and data's
-    # addresses; stepping a scene N times that way must leave the state bit-identical to the
-    # bindings' own mujoco.mj_step (a wrong library, address or ABI would not)
+    # the compiled kernel calls MuJoCo's C mj_step at its address (armlab.sim._mujoco_calls.call)
+    # on the model's and data's addresses; stepping a scene N times that way must leave the state
+    # bit-identical to the bindings' own mujoco.mj_step (a wrong library, address or ABI would not)
     import mujoco
     from numba import njit
 
     from armlab.sim import force_kernel
-
-    step = force_kernel._mj_step
+    from armlab.sim._mujoco_calls import call
 
     @njit
-    def steps(mp, dp, n):
+    def steps(fn, mp, dp, n):
         for _ in range(n):
-            step(mp, dp)
+            call(fn, mp, dp)
 
     scene = build_direct_drive_scene(ElbowConfig(), SimConfig())
     m = scene.model

@@ -26,10 +26,9 @@ from typing import NamedTuple
 
 import mujoco
 import numpy as np
-from llvmlite.binding import load_library_permanently
-from numba import njit, types
+from numba import njit
 
-from armlab.sim._mujoco_calls import mujoco_library_path
+from armlab.sim._mujoco_calls import call, mujoco_function_address
 
 __all__ = [
     "CURRENT_DUTY",
@@ -47,20 +46,12 @@ __all__ = [
 OK, SAFETY, GRASP, CURRENT_RUN, CURRENT_DUTY, NONFINITE = range(6)
 
 
-def _load_mujoco_symbols() -> None:
-    """Make the C symbols of the MuJoCo library the bindings loaded visible to compiled code."""
-    load_library_permanently(str(mujoco_library_path()))
-
-
-_load_mujoco_symbols()
-# void mj_step(const mjModel* m, mjData* d): resolved by name when the kernel is linked, so the
-# compiled kernel can be cached on disk (a ctypes function object cannot)
-_mj_step = types.ExternalFunction("mj_step", types.void(types.voidptr, types.voidptr))
-
-
-def mj_pointers(model: mujoco.MjModel, data: mujoco.MjData) -> tuple[int, int]:
-    """The C addresses of ``model`` and ``data`` (the bindings' ``_address``) for the kernel."""
-    return int(model._address), int(data._address)
+def mj_pointers(model: mujoco.MjModel, data: mujoco.MjData) -> tuple[int, int, int]:
+    """What the kernel calls MuJoCo with: the address of its C ``mj_step``
+    (:func:`~armlab.sim._mujoco_calls.mujoco_function_address`) and of ``model`` and ``data``
+    (the bindings' ``_address``). Passed as arguments, never compiled in, so numba's on-disk cache
+    stays valid across processes."""
+    return mujoco_function_address("mj_step"), int(model._address), int(data._address)
 
 
 class ControlParams(NamedTuple):
@@ -119,7 +110,7 @@ def _round(x):
 
 @njit(nogil=True, cache=True)
 def control_periods(
-    mp, dp, k0, k1, p, st, ref, f_noise, e_noise, acc_noise,
+    step, mp, dp, k0, k1, p, st, ref, f_noise, e_noise, acc_noise,
     qpos, sd, ctrl, act, length, velocity,
     rec, act_rec, hist_len, hist_vel, mrows, mrow0, midx,
     el_a, el_b, el_c, el_x,
@@ -127,8 +118,9 @@ def control_periods(
     """Run control periods ``k0 .. k1 - 1``; return ``(status, k)``: OK and ``k1``, or the failing
     check and its period (``st[STOP_VALUE]`` holds the value that failed it).
 
-    ``mp``/``dp`` are :func:`mj_pointers`; ``qpos``, ``sd`` (sensordata), ``ctrl``, ``act``,
-    ``length``/``velocity`` (actuator) are views of the same MjData. Each period records into
+    ``step``, ``mp``, ``dp`` are :func:`mj_pointers` (``mj_step``, the model, the data);
+    ``qpos``, ``sd`` (sensordata), ``ctrl``, ``act``, ``length``/``velocity`` (actuator) are views
+    of the same MjData. Each period records into
     ``rec`` (7, total): f_measured, f_true, theta_measured, theta, phi, current, tau_dym;
     ``act_rec`` (total, na); ``hist_len``/``hist_vel`` (total, nu) the actuators' state the reflex
     reads ((total, 0): none). It writes ``mrows[k - mrow0]`` into the muscle controls ``midx``
@@ -202,7 +194,7 @@ def control_periods(
             for j in range(act.size):
                 act_rec[k, j] = act[j]
         for _ in range(p.substeps):
-            _mj_step(mp, dp)
+            call(step, mp, dp)  # MuJoCo's C mj_step
         if not math.isfinite(qpos[p.qm]):
             return NONFINITE, k
     return OK, k1

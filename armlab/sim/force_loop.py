@@ -181,7 +181,7 @@ def _periods(block, scene, p, ref, noise, elbow, reflex, muscle_base, element, f
     hist_vel = commands.hist_vel if commands else no_history
     st = np.zeros(STATE_SIZE)
     rec, act_rec = np.empty((7, total)), np.zeros((total, m.na))
-    mp, dp = mj_pointers(m, data)
+    step, mp, dp = mj_pointers(m, data)
     views = (
         data.qpos,
         data.sensordata,
@@ -197,6 +197,7 @@ def _periods(block, scene, p, ref, noise, elbow, reflex, muscle_base, element, f
             rows, row0, stop = commands.block(k)
         end = min(k + block, stop, total)
         status, k_stop = control_periods(
+            step,
             mp,
             dp,
             k,
