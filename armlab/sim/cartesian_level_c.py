@@ -80,7 +80,11 @@ def hill_arm_force(arm: HillArm, q_h: np.ndarray, qd_h: np.ndarray, q_r: np.ndar
     qd = np.linalg.solve(jac, np.asarray(qd_h, float)[..., None])[..., 0]
     data = arm.frozen_data()
     tau = joint_forces(sc.model, data, sc.arm_qpos, sc.arm_dof, q, qd)
-    tau_ref = joint_forces(sc.model, data, sc.arm_qpos, sc.arm_dof, q_ref, np.zeros_like(q_ref))
+    # the references are a few stop points held over many samples: each distinct one once (every
+    # row is computed alone, so the values are those of a call on all rows)
+    refs, which = np.unique(q_ref, axis=0, return_inverse=True)
+    tau_ref = joint_forces(sc.model, data, sc.arm_qpos, sc.arm_dof, refs, np.zeros_like(refs))
+    tau_ref = tau_ref[which.reshape(-1)]
     # static balance of the massless arm: τ_net + Jᵀ F_robot = 0
     return -np.linalg.solve(np.swapaxes(jac, -1, -2), (tau - tau_ref)[..., None])[..., 0]
 
