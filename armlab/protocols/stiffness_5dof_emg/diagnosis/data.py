@@ -35,7 +35,8 @@ sensors as recorded (the realistic JR3 is low-passed at 125 Hz and quantised: a 
 white-noise estimate reads ~0 there) and the IK's own noise (markers). Every row is whitened by its
 channel's noise standard deviation, so the three units mix as a weighted least squares.
 
-Held out: every third trial of each condition (its 2nd, 5th, ...); the model is fitted on the rest.
+Held out: in every (condition, direction) cell every third disturbance from the second (its 2nd,
+5th, ...), so each cell keeps its first in training; the model is fitted on the rest.
 """
 
 from __future__ import annotations
@@ -49,7 +50,11 @@ import numpy as np
 
 from armlab.errors import DataError
 from armlab.estimation.inverse_kinematics import inverse_kinematics
-from armlab.estimation.static_inertial import gravity_torque_from_fit, static_inertial_regression, static_regressor
+from armlab.estimation.static_inertial import (
+    gravity_torque_from_fit,
+    static_inertial_regression,
+    static_regressor,
+)
 from armlab.estimation.stiffness_trials import (
     WristSensorGeometry,
     chordal_mean_rotation,
@@ -80,7 +85,14 @@ CHANNELS = (
     "base.my",
     "base.mz",
 )
-_REQUIRED = ("wrist_force", "wrist_torque", "base_force", "base_torque", "forearm_marker_pos", "forearm_marker_quat")
+_REQUIRED = (
+    "wrist_force",
+    "wrist_torque",
+    "base_force",
+    "base_torque",
+    "forearm_marker_pos",
+    "forearm_marker_quat",
+)
 _ATTRS = (
     "marker_fs_hz",
     "q0_rad",
@@ -98,7 +110,7 @@ _ATTRS = (
 )
 _MAX_FORCE_N = 2000.0  # N, the base JR3's range (JR3_BASE_FORCE): beyond, the unit is not N
 _MAX_POS_M = 3.0  # m, the seated arm's reach lies within 1 m of the base sensor
-_HELD_EVERY = 3  # every third trial of a condition is held out
+_HELD_EVERY = 3  # every third disturbance of a (condition, direction) cell, from the second
 _PRE_BINS = 4  # the pre-interval [-0.2, 0] s in bins
 _MIN_PER_CONDITION = 10  # trials: one per direction, so A^T A of Eq. (15) is regular
 
@@ -125,7 +137,9 @@ def load_stiff5_trials(path: Path):
         a = np.asarray(trials.channels[name])
         width = 4 if name.endswith("quat") else 3
         if a.ndim != 3 or a.shape[-1] != width:
-            raise DataError(f"{path.name}: channel {name!r} must be (trials, samples, {width}), got {a.shape}")
+            raise DataError(
+                f"{path.name}: channel {name!r} must be (trials, samples, {width}), got {a.shape}"
+            )
         if not np.all(np.isfinite(a)):
             raise DataError(f"{path.name}: channel {name!r} holds NaN or infinite values")
     big = {"base_force": _MAX_FORCE_N, "wrist_force": _MAX_FORCE_N, "forearm_marker_pos": _MAX_POS_M}
@@ -258,7 +272,9 @@ def _xi_red(trials, kin, offset) -> tuple[np.ndarray, str]:
     from armlab.models.arm_5dof import load_arm_5dof
 
     inr = trials.attrs.get("inertial")
-    if isinstance(inr, dict) and {"base_wrench", "marker_pos", "marker_quat", "configurations_rad"} <= set(inr):
+    if isinstance(inr, dict) and {"base_wrench", "marker_pos", "marker_quat", "configurations_rad"} <= set(
+        inr
+    ):
         wrench = np.asarray(inr["base_wrench"], float).mean(axis=1)
         pos = np.asarray(inr["marker_pos"], float).mean(axis=1)
         rot = chordal_mean_rotation(quat_to_rot(np.asarray(inr["marker_quat"], float)))
@@ -286,7 +302,9 @@ def prepare_stiff5(trials) -> Stiff5Set:
     step = int(round(fs / float(a["marker_fs_hz"])))
     nb = int(round(BIN_S * fs))
     if step < 1 or nb % step:
-        raise DataError(f"the F/T rate {fs} Hz must be a whole multiple of the marker rate {a['marker_fs_hz']} Hz")
+        raise DataError(
+            f"the F/T rate {fs} Hz must be a whole multiple of the marker rate {a['marker_fs_hz']} Hz"
+        )
     n = np.shape(trials.channels["wrist_force"])[1]
     rise = float(a["rise_s"])
     first_hold = onset + int(round((rise + 0.1) * fs))
@@ -300,7 +318,9 @@ def prepare_stiff5(trials) -> Stiff5Set:
     dirs = np.asarray(trials.trial_meta["direction"], int)
     names_c = tuple(str(s) for s in a["condition_names"])
     if cond.min() < 0 or cond.max() >= len(names_c) or dirs.min() < 0 or dirs.max() > 9:
-        raise DataError(f"trial_meta condition must index {len(names_c)} conditions and direction lie in 0..9")
+        raise DataError(
+            f"trial_meta condition must index {len(names_c)} conditions and direction lie in 0..9"
+        )
     counts = np.bincount(cond, minlength=len(names_c))
     if counts.min() < _MIN_PER_CONDITION:
         raise DataError(
@@ -347,7 +367,10 @@ def prepare_stiff5(trials) -> Stiff5Set:
     pw = p_w.reshape(*q.shape[:2], 3)
     grav = static_regressor(kin, q) @ xi  # (m, 8, 3): Fz, Mx, My of the weight on the seat
     base_pred = np.concatenate(
-        [-w[..., :3], -(np.cross(pw, w[..., :3]) + w[..., 3:]) + np.pad(grav[..., 1:], ((0, 0), (0, 0), (0, 1)))],
+        [
+            -w[..., :3],
+            -(np.cross(pw, w[..., :3]) + w[..., 3:]) + np.pad(grav[..., 1:], ((0, 0), (0, 0), (0, 1))),
+        ],
         axis=-1,
     )  # the base site is the world origin with the world's axes (models/arm_5dof)
     base = np.concatenate([allbins["base_force"], allbins["base_torque"]], axis=-1)
@@ -364,14 +387,24 @@ def prepare_stiff5(trials) -> Stiff5Set:
     full = np.concatenate([dtau, dq, dbase], axis=-1)  # (m, 8, 16)
     within = np.zeros(len(cond), int)
     for c in range(len(names_c)):
-        idx = np.flatnonzero(cond == c)
-        within[idx] = np.arange(idx.size)
+        for d in range(10):
+            idx = np.flatnonzero((cond == c) & (dirs == d))
+            within[idx] = np.arange(idx.size)
     held = within % _HELD_EVERY == 1
     # the nominal model's residual in the still pre-interval: the torque rows' prediction K Δq
     # carries the IK's noise (K ~ 20 N·m/rad times ~1 mrad), the base rows' the wrist sensor's
-    k_c = np.stack([_ls_stiffness(dq[(cond == c) & ~held, _PRE_BINS:], dtau[(cond == c) & ~held, _PRE_BINS:]) for c in range(len(names_c))])
+    k_c = np.stack(
+        [
+            _ls_stiffness(dq[(cond == c) & ~held, _PRE_BINS:], dtau[(cond == c) & ~held, _PRE_BINS:])
+            for c in range(len(names_c))
+        ]
+    )
     pred_pre = np.concatenate(
-        [np.einsum("mij,mbj->mbi", k_c[cond], dq[:, :_PRE_BINS]), disp_nom[:, :_PRE_BINS], dbase_pred[:, :_PRE_BINS]],
+        [
+            np.einsum("mij,mbj->mbi", k_c[cond], dq[:, :_PRE_BINS]),
+            disp_nom[:, :_PRE_BINS],
+            dbase_pred[:, :_PRE_BINS],
+        ],
         axis=-1,
     )
     pre = full[:, :_PRE_BINS] - pred_pre

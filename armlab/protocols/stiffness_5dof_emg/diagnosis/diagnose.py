@@ -49,11 +49,18 @@ def _breakdowns(cs: Stiff5Set, y: np.ndarray, resid: np.ndarray) -> dict:
         for b in range(cs.bin_ms.shape[0])
     ]
     channels = [
-        {"channel": name.split(".")[0], "axis": name.split(".")[1], **masked_gap(resid, y, noise, held & (cs.row_channel == k))}
+        {
+            "channel": name.split(".")[0],
+            "axis": name.split(".")[1],
+            **masked_gap(resid, y, noise, held & (cs.row_channel == k)),
+        }
         for k, name in enumerate(CHANNELS)
     ]
     groups = [
-        {"group": g, **masked_gap(resid, y, noise, held & (cs.row_channel >= s.start) & (cs.row_channel < s.stop))}
+        {
+            "group": g,
+            **masked_gap(resid, y, noise, held & (cs.row_channel >= s.start) & (cs.row_channel < s.stop)),
+        }
         for g, s in _GROUPS.items()
     ]
     conditions = [
@@ -64,7 +71,13 @@ def _breakdowns(cs: Stiff5Set, y: np.ndarray, resid: np.ndarray) -> dict:
         {"direction": int(d), **masked_gap(resid, y, noise, held & (row_dir == d))}
         for d in np.unique(cs.direction[cs.held_trials])
     ]
-    return {"windows": windows, "channels": channels, "groups": groups, "conditions": conditions, "directions": dirs}
+    return {
+        "windows": windows,
+        "channels": channels,
+        "groups": groups,
+        "conditions": conditions,
+        "directions": dirs,
+    }
 
 
 def _stage(cs: Stiff5Set, y: np.ndarray, model: FittedModel, floor: float) -> dict:
@@ -168,5 +181,6 @@ def diagnose_stiff5(trials, cfg: DiagnosisConfig) -> tuple[dict, dict]:
         "nominal": sel.stages[0].predictions[0],
         "corrected": sel.stages[-1].predictions[0],
         "stages": sel.stages,
+        "channels": CHANNELS,
     }
     return results, {"all": series}

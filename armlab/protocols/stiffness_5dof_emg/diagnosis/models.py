@@ -149,7 +149,6 @@ STIFF5_SURROGATES: dict[str, Surrogate] = {
 }
 
 
-
 def stiff5_family(cs: Stiff5Set) -> ModelFamily:
     """How the models are built from the surrogates on ``cs`` (the names depend on its conditions)."""
     return ModelFamily(columns=stiff5_columns, linear_names=lambda model: linear_names_for(cs, model))
