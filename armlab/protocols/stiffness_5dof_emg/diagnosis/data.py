@@ -311,7 +311,8 @@ def prepare_stiff5(trials) -> Stiff5Set:
     n_hold = 4
     if onset < _PRE_BINS * nb or first_hold + n_hold * nb > n:
         raise DataError(
-            f"each record must hold {_PRE_BINS * BIN_S:g} s before the onset and {rise + 0.1 + n_hold * BIN_S:g} s "
+            f"each record must hold {_PRE_BINS * BIN_S:g} s before the onset and "
+            f"{rise + 0.1 + n_hold * BIN_S:g} s "
             f"after it (the pre-interval and the hold), got {onset / fs:g} s and {(n - onset) / fs:g} s"
         )
     cond = np.asarray(trials.trial_meta["condition"], int)

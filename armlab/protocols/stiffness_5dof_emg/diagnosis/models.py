@@ -11,7 +11,8 @@ Candidates (the catalogue keys where the catalogue has them):
 
 - ``reflex``: a stretch reflex adds, per muscle ``i``, a torque ``−g_i r_i max(ℓ_i, 0)`` with
   ``ℓ_i = r_iᵀ Δq`` its lengthening along the nominal displacement (not the measured one: a basis
-  built from a measured channel carries its noise and "explains" it) (``r_i`` the nominal arm's moment-arm row, m/rad, from
+  built from a measured channel carries its noise and "explains" it) (``r_i`` the nominal arm's
+  moment-arm row, m/rad, from
   :func:`armlab.sim.arm5_reflex.muscle_length_jacobian`): half-wave rectified, so the ± disturbances
   of one joint differ where a symmetric ``K_c`` cannot follow (its symmetric half ``K_c`` takes up).
   12 gains shared by the conditions (the lab's reflex law adds activation per stretch, independent
