@@ -3,15 +3,15 @@
 Each dataset is the stiffness stage at reduced scale (:data:`CONDITIONS`, :data:`N_PER_CONDITION`
 disturbances each; realistic sensors), simulated by the protocol's own code
 (:func:`armlab.protocols.stiffness_5dof_emg.experiment.simulate_stiffness_stage`) with one hidden
-physical effect switched on in the lab, at a log-uniform magnitude:
+physical effect switched on in the lab through the protocol's own switches (as ``armlab run``
+does, :mod:`armlab.protocols.stiffness_5dof_emg.lab_effects`), at a log-uniform magnitude:
 
 - ``reflex``: the lab's stretch reflex (``reflex.enabled``) with its three gains scaled by a factor;
-- ``cuff_compliance``: the cuff's weld softened (:func:`armlab.sim.arm5_lab_effects.soften_cuff`);
+- ``cuff_compliance``: the cuff's weld softened (``cuff.time_constant_s``);
 - ``marker_soft_tissue``: the forearm cluster lags pronation by a fraction
-  (:func:`armlab.sim.arm5_lab_effects.marker_soft_tissue`, applied to the recorded cluster with the
-  true angles the simulation knows);
-- ``base_sensor_drift``: the base JR3 drifts at a session-constant rate
-  (:func:`armlab.sim.arm5_lab_effects.base_sensor_drift`), random direction.
+  (``effects.marker_soft_tissue.slip``);
+- ``base_sensor_drift``: the base JR3 drifts at constant rates (``effects.base_sensor_drift``),
+  random direction.
 
 Only measured channels and the lab's attributes are written (``true_q`` and ``ground_truth`` are
 dropped): the diagnoser never sees the truth. The effect-to-noise ratio, as the other referees:
@@ -68,10 +68,10 @@ def describe(ref: RefereeConfig) -> str:
 
 
 def _simulate(params: dict, hidden, preset: str, seed: int):
-    from armlab.models.arm_5dof import limb_kinematics
+    from armlab.config.effects import BaseSensorDrift, MarkerSoftTissue
     from armlab.protocols.stiffness_5dof_emg.config import Stiffness5dofConfig, TrialsConfig
-    from armlab.protocols.stiffness_5dof_emg.experiment import build_lab, simulate_stiffness_stage
-    from armlab.sim.arm5_lab_effects import base_sensor_drift, marker_soft_tissue, soften_cuff
+    from armlab.protocols.stiffness_5dof_emg.experiment import simulate_stiffness_stage
+    from armlab.protocols.stiffness_5dof_emg.lab_effects import apply_recorded_effects, build_effect_lab
 
     cfg = Stiffness5dofConfig(
         stages=["stiffness"],
@@ -85,33 +85,22 @@ def _simulate(params: dict, hidden, preset: str, seed: int):
         cfg.reflex.stretch_gain *= s
         cfg.reflex.velocity_gain *= s
         cfg.reflex.spinal_gain *= s
-    lab = build_lab()
     if "cuff_compliance" in hidden:
-        soften_cuff(lab.scene.model, params["cuff_compliance"]["time_constant_s"])
-    tr = simulate_stiffness_stage(cfg, lab)
-    ch = dict(tr.channels)
+        cfg.cuff.time_constant_s = params["cuff_compliance"]["time_constant_s"]
     if "marker_soft_tissue" in hidden:
-        ch["forearm_marker_pos"], ch["forearm_marker_quat"] = marker_soft_tissue(
-            ch["forearm_marker_pos"],
-            ch["forearm_marker_quat"],
-            ch["true_q"],
-            np.asarray(tr.attrs["q0_rad"], float),
-            params["marker_soft_tissue"]["slip"],
-            limb_kinematics(lab.arm),
-        )
+        cfg.effects.marker_soft_tissue = MarkerSoftTissue(slip=params["marker_soft_tissue"]["slip"])
     if "base_sensor_drift" in hidden:
         p = params["base_sensor_drift"]
-        ch["base_force"], ch["base_torque"] = base_sensor_drift(
-            ch["base_force"],
-            ch["base_torque"],
-            np.r_[
-                p["force_N_per_s"] * np.asarray(p["force_direction"]),
-                p["torque_Nm_per_s"] * np.asarray(p["torque_direction"]),
-            ],
-            np.arange(ch["base_force"].shape[1]) / tr.fs_hz,
-            np.asarray(tr.trial_meta["wait_s"], float),
+        rate = np.r_[
+            p["force_N_per_s"] * np.asarray(p["force_direction"]),
+            p["torque_Nm_per_s"] * np.asarray(p["torque_direction"]),
+        ]
+        cfg.effects.base_sensor_drift = BaseSensorDrift(
+            **dict(zip(BaseSensorDrift.SIGNED, map(float, rate), strict=True))
         )
-    del ch["true_q"]
+    lab = build_effect_lab(cfg)
+    tr = apply_recorded_effects(cfg, simulate_stiffness_stage(cfg, lab), lab)
+    ch = {k: v for k, v in tr.channels.items() if k != "true_q"}
     attrs = {k: v for k, v in tr.attrs.items() if k != "ground_truth"}
     return replace(tr, channels=ch, units={k: v for k, v in tr.units.items() if k in ch}, attrs=attrs)
 
