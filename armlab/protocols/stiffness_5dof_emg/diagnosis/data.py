@@ -41,7 +41,7 @@ Held out: in every (condition, direction) cell every third disturbance from the 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import cached_property
 from pathlib import Path
 
@@ -66,6 +66,7 @@ from armlab.sim.arm5_trials import directions
 
 __all__ = [
     "BIN_S",
+    "PROBE_GAIN",
     "CHANNELS",
     "JOINTS",
     "Stiff5Set",
@@ -112,6 +113,9 @@ _MAX_FORCE_N = 2000.0  # N, the base JR3's range (JR3_BASE_FORCE): beyond, the u
 _MAX_POS_M = 3.0  # m, the seated arm's reach lies within 1 m of the base sensor
 _HELD_EVERY = 3  # every third disturbance of a (condition, direction) cell, from the second
 _PRE_BINS = 4  # the pre-interval [-0.2, 0] s in bins
+#: the probe's relative change of the measured pronation (the marker surrogate's finite difference;
+#: the rows are smooth in it, so 0.05 is well inside the slips the referee hides, 0.01-0.3)
+PROBE_GAIN = 0.05
 _MIN_PER_CONDITION = 10  # trials: one per direction, so A^T A of Eq. (15) is regular
 
 
@@ -169,6 +173,8 @@ class Stiff5Set:
         condition, direction: (m,) int; condition_names: the conditions' names.
         held_trials: (m,) bool. noise_var: (16,) each channel's row noise variance (its unit²).
         xi_source: where xi_red came from. names: (m,) trial labels.
+        probe: the same rows with the measured pronation change scaled by 1 + :data:`PROBE_GAIN`
+            (None on a probe itself).
     """
 
     y: np.ndarray
@@ -187,6 +193,7 @@ class Stiff5Set:
     xi_source: str
     names: tuple[str, ...]
     fs_hz: float = 20.0  # Hz, the bins' rate (1 / BIN_S), for the core's effective sample count
+    probe: Stiff5Set | None = None  # the rows with the pronation scaled (prepare_stiff5)
 
     @property
     def n_trials(self) -> int:
@@ -285,12 +292,22 @@ def _xi_red(trials, kin, offset) -> tuple[np.ndarray, str]:
 
 
 def prepare_stiff5(trials) -> Stiff5Set:
-    """The scored rows of a ``stiffness_5dof_emg`` trial file (module docstring).
+    """The scored rows of a ``stiffness_5dof_emg`` trial file (module docstring), with the
+    :attr:`Stiff5Set.probe` the marker-artefact surrogate differentiates: the same rows with the
+    measured pronation's change from the working posture scaled by ``1 +`` :data:`PROBE_GAIN`
+    (the cluster turned back about the pronation axis), whitened by the same noise.
 
     Raises:
         DataError: trials with different onsets, a record too short for the pre-interval and the
             hold, fewer than :data:`_MIN_PER_CONDITION` trials in a condition.
     """
+    base = _prepare(trials, 0.0)
+    probe = _prepare(trials, PROBE_GAIN)
+    return replace(base, probe=replace(probe, noise_var=base.noise_var))
+
+
+def _prepare(trials, pronation_gain: float) -> Stiff5Set:
+    """:func:`prepare_stiff5` with the measured pronation change from q0 scaled by 1 + gain."""
     from armlab.models.arm_5dof import limb_kinematics, load_arm_5dof
 
     a = trials.attrs
@@ -354,6 +371,12 @@ def prepare_stiff5(trials) -> Stiff5Set:
     guess[:, _PRE_BINS:] += cmd[:, None]
     r_w, p_w = wrist_from_marker(mrot.reshape(-1, 3, 3), mpos.reshape(-1, 3), offset)
     q = inverse_kinematics(kin, r_w, p_w, guess.reshape(-1, 5)).q.reshape(*mpos.shape[:2], 5)
+    if pronation_gain:  # the cluster turned about the pronation axis: the wrist frame with it
+        r0, p0 = kin.forward(q)
+        q = q + pronation_gain * np.eye(5)[4] * (q[..., 4:] - q0[4])
+        r1, p1 = kin.forward(q)
+        r_w = (r1 @ np.swapaxes(r0, -1, -2)).reshape(-1, 3, 3) @ r_w
+        p_w = p_w + (p1 - p0).reshape(-1, 3)
     geo = WristSensorGeometry(
         ft_pos=tuple(np.asarray(a["wrist_ft_pos_m"], float)),
         ft_rot=tuple(map(tuple, np.asarray(a["wrist_ft_rot"], float))),

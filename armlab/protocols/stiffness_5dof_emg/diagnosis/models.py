@@ -20,9 +20,14 @@ Candidates (the catalogue keys where the catalogue has them):
 - ``cuff_compliance``: a compliant cuff between the robot and the forearm: the limb lags the
   commanded displacement by ``J_limb⁺ [c_t Δf; c_r Δm]`` (m/N, rad/(N·m)), on the displacement rows
   (the markers are on the limb, so the torque-displacement relation is unchanged);
-- ``marker_soft_tissue``: the skin under the forearm cluster slides: the measured displacement of
-  each joint is off by a fraction of its displacement (5 factors on the nominal displacement; the
-  lab's artefact lags pronation);
+- ``marker_soft_tissue``: the skin under the forearm cluster slides, so the cluster (and the IK's
+  pronation) turns by only ``1 - slip`` of the bone's pronation from the working posture (the lab's
+  artefact, :func:`armlab.sim.arm5_lab_effects.marker_soft_tissue`). Correcting the measured
+  pronation change by the gain ``g = slip / (1 - slip)`` changes every row computed from the markers
+  (Δq, the wrist frame the wrist JR3 is turned by, J_limb, G(q), the base's lever arms): linear in
+  ``g`` about the data (the probe rows of :func:`.data.prepare_stiff5`, a finite difference), the
+  measured rows gain ``g·D_y`` and the nominal columns ``g·D_X``. So the model is
+  ``y = (X + g D_X) β − c D_y`` with ``g`` (nonlinear, [0, 1]) and ``c`` (linear, ≈ g);
 - ``base_sensor_drift``: the base JR3 drifts since its tare at a rate per axis (6 rates, N/s and
   N·m/s, the same over the session), on the base rows, ``rate·t`` from the pre-interval.
 
@@ -35,8 +40,8 @@ from functools import lru_cache
 
 import numpy as np
 
-from armlab.diagnosis.families import ModelFamily, Surrogate
-from armlab.protocols.stiffness_5dof_emg.diagnosis.data import JOINTS, Stiff5Set
+from armlab.diagnosis.families import ModelFamily, NLParam, Surrogate
+from armlab.protocols.stiffness_5dof_emg.diagnosis.data import PROBE_GAIN, Stiff5Set
 
 __all__ = [
     "STIFF5_SURROGATES",
@@ -94,10 +99,8 @@ def _cuff(cs: Stiff5Set) -> np.ndarray:
 
 
 def _soft_tissue(cs: Stiff5Set) -> np.ndarray:
-    out = np.zeros((*cs.y.shape, 5))
-    for j in range(5):
-        out[:, :, 5 + j, j] = cs.nominal_disp[..., j]
-    return out
+    """(m, nb, 16, 1): minus the rows' change per unit of pronation gain (probe's finite difference)."""
+    return (-(cs.probe.y - cs.y) / PROBE_GAIN)[..., None]
 
 
 def _drift(cs: Stiff5Set) -> np.ndarray:
@@ -116,10 +119,13 @@ _BLOCKS = {
 
 
 def stiff5_columns(cs: Stiff5Set, model: tuple[Surrogate, ...], theta: dict[str, float]) -> np.ndarray:
-    """(rows, k) whitened regressor of the composed model on the rows of ``cs`` (theta unused:
-    every surrogate here is linear)."""
-    del theta
-    blocks = [_nominal(cs)] + [_BLOCKS[s.name](cs) for s in model]
+    """(rows, k) whitened regressor of the composed model on the rows of ``cs``; ``theta`` holds
+    the one nonlinear parameter, ``marker_soft_tissue.pronation_gain``."""
+    nominal = _nominal(cs)
+    if any(s.name == "marker_soft_tissue" for s in model):  # the K columns of the corrected Δq
+        gain = theta["marker_soft_tissue.pronation_gain"]
+        nominal = nominal + (gain / PROBE_GAIN) * (_nominal(cs.probe) - nominal)
+    blocks = [nominal] + [_BLOCKS[s.name](cs) for s in model]
     return cs.rows(np.concatenate(blocks, axis=-1))
 
 
@@ -139,7 +145,12 @@ STIFF5_SURROGATES: dict[str, Surrogate] = {
     for s in (
         Surrogate("reflex", "additive", (), tuple(f"gain_{i}" for i in range(12))),
         Surrogate("cuff_compliance", "additive", (), ("translational_m_per_N", "rotational_rad_per_Nm")),
-        Surrogate("marker_soft_tissue", "additive", (), tuple(f"slip_{j}" for j in JOINTS)),
+        Surrogate(
+            "marker_soft_tissue",
+            "additive",
+            (NLParam("pronation_gain", 0.0, 1.0, (0.02, 0.1, 0.4)),),
+            ("rows_gain",),
+        ),
         Surrogate(
             "base_sensor_drift",
             "additive",
