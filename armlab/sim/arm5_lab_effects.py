@@ -7,8 +7,9 @@
   a soft-tissue/strap interface of the paper's plastic cuff (Sec. 3).
 - :func:`marker_soft_tissue`: the skin under the forearm cluster slides over the radius and ulna:
   the cluster turns about the forearm (pronation) axis by only ``1 - slip`` of the bone's
-  pronation from the working posture (forearm clusters under-read pronation by tens of percent:
-  Cutti et al. 2005, J. Biomech. 38, "soft tissue artefact ... forearm"; *assumption* for the size).
+  pronation from the working posture (skin clusters under-read a long bone's axial rotation by
+  tens of percent, the soft-tissue artefact: Cutti et al. 2005, Gait & Posture 21:341, for the
+  humerus; *assumption* for the forearm and the size).
 - :func:`base_sensor_drift`: the base JR3 drifts since its tare at a constant rate per axis over
   the session (thermal drift of an untempered gauge; the wrist JR3 preset assumes ~0.1 N/min).
 """
