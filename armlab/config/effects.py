@@ -30,6 +30,7 @@ __all__ = [
     "LEVELS",
     "AccelMisalignment",
     "AccelNoise",
+    "BaseSensorDrift",
     "CableDrag",
     "ChannelDelay",
     "CocontractionVariation",
@@ -41,6 +42,7 @@ __all__ = [
     "ForceSensorDrift",
     "ForceSensorNoise",
     "JointFriction",
+    "MarkerSoftTissue",
     "NonQuadraticField",
     "PayloadMass",
     "PlaneTilt",
@@ -341,6 +343,66 @@ class TorsoTranslation(Effect):
     mass_kg: float = 10.0  # kg, trunk mass moving with the shoulder
 
 
+@dataclass(kw_only=True)
+class MarkerSoftTissue(Effect):
+    NAME: ClassVar[str] = "marker_soft_tissue"
+    LEVEL: ClassVar[EffectLevel] = "sensor"
+    PHYSICS: ClassVar[str] = (
+        "the skin under a forearm marker cluster slides over the radius and ulna: the cluster turns "
+        "about the forearm (pronation) axis by only (1 - slip) of the bone's pronation"
+    )
+    SOURCE: ClassVar[str] = (
+        "soft-tissue artefact of skin-mounted clusters under axial rotation of a long bone (Cutti et "
+        "al. 2005, Gait & Posture 21:341, the humerus: tens of percent); the forearm's size here is "
+        "an assumption (0.01-0.3)"
+    )
+    CONFUSABLE: ClassVar[dict[str, str]] = {
+        "cuff_compliance": "a second marker cluster on the cuff (the cuff's stretch grows with the "
+        "wrench, the skin's slip with the pronation angle)"
+    }
+    slip: float = 0.1  # 1, fraction of the pronation change the cluster misses (assumption, see SOURCE)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if not self.slip < 1.0:
+            raise ConfigError(f"effects.{self.NAME}.slip must lie in [0, 1), got {self.slip!r}")
+
+
+@dataclass(kw_only=True)
+class BaseSensorDrift(Effect):
+    NAME: ClassVar[str] = "base_sensor_drift"
+    LEVEL: ClassVar[EffectLevel] = "sensor"
+    PHYSICS: ClassVar[str] = (
+        "the base (seat) F/T sensor's readings drift at a constant rate per axis since its tare "
+        "(thermal drift of the gauges); the wrist sensor is unaffected"
+    )
+    SOURCE: ClassVar[str] = (
+        "strain-gauge drift 0.1-1 % FS per minute (ATI F/T manual, temperature effects); JR3 base "
+        "unit range 2000 N / 200 N·m (armlab.sensors JR3_BASE_FORCE/_TORQUE): up to ~0.3 N/s, 0.03 N·m/s"
+    )
+    CONFUSABLE: ClassVar[dict[str, str]] = {
+        "force_sensor_drift": "the same drift on the wrist sensor: the base sensor alone drifts here"
+    }
+    SIGNED: ClassVar[tuple[str, ...]] = (
+        "fx_N_per_s",
+        "fy_N_per_s",
+        "fz_N_per_s",
+        "mx_Nm_per_s",
+        "my_Nm_per_s",
+        "mz_Nm_per_s",
+    )
+    fx_N_per_s: float = 0.0  # N/s, along the base sensor's x (world) axis
+    fy_N_per_s: float = 0.0  # N/s
+    fz_N_per_s: float = 0.1  # N/s, ~0.3 % FS/min of a 2000 N unit (ATI manual's range)
+    mx_Nm_per_s: float = 0.0  # N·m/s
+    my_Nm_per_s: float = 0.0  # N·m/s
+    mz_Nm_per_s: float = 0.0  # N·m/s
+
+    def rates(self) -> tuple[float, ...]:
+        """(6,) N/s, N·m/s: the drift rates in the order fx, fy, fz, mx, my, mz."""
+        return tuple(getattr(self, k) for k in self.SIGNED)
+
+
 EFFECTS: dict[str, type[Effect]] = {
     cls.NAME: cls
     for cls in (
@@ -363,6 +425,8 @@ EFFECTS: dict[str, type[Effect]] = {
         RobotModelError,
         PlaneTilt,
         TorsoTranslation,
+        MarkerSoftTissue,
+        BaseSensorDrift,
     )
 }
 
@@ -390,6 +454,8 @@ class EffectsConfig:
     robot_model_error: RobotModelError | None = None
     plane_tilt: PlaneTilt | None = None
     torso_translation: TorsoTranslation | None = None
+    marker_soft_tissue: MarkerSoftTissue | None = None
+    base_sensor_drift: BaseSensorDrift | None = None
 
 
 def enabled_effects(cfg: EffectsConfig) -> dict[str, Effect]:

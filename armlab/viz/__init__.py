@@ -42,6 +42,10 @@ from armlab.viz.recording import (
     view_command,
     write_recording,
 )
+from armlab.viz.stiff5_diagnosis import (
+    stiff5_diagnosis_figures,
+    stiff5_diagnosis_recording,
+)
 from armlab.viz.stiffness5 import format_stiffness5_table, plot_stiffness5_figures
 from armlab.viz.stiffness5_recording import write_stiffness5_recording
 from armlab.viz.vfs import format_vfs_tables, plot_vfs_figures, write_vfs_recording
@@ -70,6 +74,8 @@ __all__ = [
     "plot_cartesian_figures",
     "write_cartesian_recording",
     "cart_diagnosis_figures",
+    "stiff5_diagnosis_figures",
+    "stiff5_diagnosis_recording",
     "cart_diagnosis_recording",
     "cond_diagnosis_figures",
     "cond_diagnosis_recording",

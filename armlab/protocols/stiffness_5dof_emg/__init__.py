@@ -13,15 +13,19 @@ from armlab.protocols.base import Protocol
 from armlab.protocols.stiffness_5dof_emg import hooks, preflight
 from armlab.protocols.stiffness_5dof_emg.config import (
     CalibrationConfig,
+    CuffConfig,
     EstimationConfig,
     InertialConfig,
     Stiffness5dofConfig,
     TrialsConfig,
 )
+from armlab.protocols.stiffness_5dof_emg.diagnosis import HOOKS
+from armlab.protocols.stiffness_5dof_emg.lab_effects import LAB_EFFECTS
 
 __all__ = [
     "PROTOCOL",
     "CalibrationConfig",
+    "CuffConfig",
     "EstimationConfig",
     "InertialConfig",
     "Stiffness5dofConfig",
@@ -41,13 +45,18 @@ PROTOCOL = Protocol(
     reestimate=hooks.reestimate,
     outputs=hooks.outputs,
     format_table=hooks.format_table,
-    lab_effects={"reflex": "reflex.enabled"},
-    catalogue=("reflex",),
+    effects=LAB_EFFECTS,
+    lab_effects={"reflex": "reflex.enabled", "cuff_compliance": "cuff.time_constant_s"},
+    catalogue=("reflex", "cuff_compliance", "marker_soft_tissue", "base_sensor_drift", "torso_translation"),
+    diagnosis=HOOKS,
     examples=(
         "run protocol=stiffness_5dof_emg sensors=ideal",
         "run protocol=stiffness_5dof_emg stages=[stiffness]",
         "run protocol=stiffness_5dof_emg reflex.enabled=true",
         "run protocol=stiffness_5dof_emg trials.n_per_condition=20 trials.conditions=[Z-10,Z+10]",
         "estimate outputs/stiffness_5dof_emg/<run> estimation.post_interval_s=[0.25,0.4]",
+        "run protocol=stiffness_5dof_emg cuff.time_constant_s=0.01 effects=[base_sensor_drift]",
+        "diagnose data=outputs/stiffness_5dof_emg/<run> protocol=stiffness_5dof_emg",
+        "diagnose-benchmark referee.protocol=stiffness_5dof_emg referee.replicates=2",
     ),
 )

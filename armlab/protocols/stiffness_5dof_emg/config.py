@@ -24,6 +24,7 @@ __all__ = [
     "BUILT_STAGES",
     "STAGES",
     "CalibrationConfig",
+    "CuffConfig",
     "EstimationConfig",
     "InertialConfig",
     "Stage",
@@ -183,6 +184,22 @@ class EstimationConfig:
 
 
 @dataclass(kw_only=True)
+class CuffConfig:
+    """The 6-D cuff between the LWR's flange and the forearm (models/arm_5dof, a MuJoCo weld)."""
+
+    # s, the weld's time constant (MuJoCo solref, critically damped; armlab.sim.arm5_lab_effects.
+    # soften_cuff): 0 keeps the nominal rigid weld (2 timesteps); (2 timesteps, 0.1] makes the cuff
+    # a compliance in series with the arm (the catalogue's cuff_compliance; referee 0.002-0.02 s)
+    time_constant_s: float = 0.0
+
+    def __post_init__(self) -> None:
+        check(
+            self.time_constant_s == 0.0 or 0.0 < self.time_constant_s <= 0.1,
+            f"cuff.time_constant_s must be 0 (rigid) or lie in (0, 0.1] s, got {self.time_constant_s}",
+        )
+
+
+@dataclass(kw_only=True)
 class Stiffness5dofConfig(ExperimentConfig):
     """The seated 5-DoF arm perturbed by the LWR through a 6-D cuff (seeds/001)."""
 
@@ -198,6 +215,8 @@ class Stiffness5dofConfig(ExperimentConfig):
     # (paper 000 Sec. II-B; armlab.config.schema.ReflexConfig), OFF by default: the paper's model
     # (Eq. (14)) freezes activation; on, spec 001's check 7 measures its bias
     reflex: ReflexConfig = field(default_factory=lambda: ReflexConfig(enabled=False))
+    # the cuff's compliance (0: the rigid weld of the nominal lab); the diagnosis's cuff_compliance
+    cuff: CuffConfig = field(default_factory=CuffConfig)
 
     def __post_init__(self) -> None:
         super().__post_init__()

@@ -10,7 +10,8 @@ from armlab.models.arm_5dof import limb_kinematics, load_arm_5dof
 from armlab.protocols._files import write_new
 from armlab.protocols.base import OutputContext, Simulated
 from armlab.protocols.stiffness_5dof_emg.config import EstimationConfig, Stiffness5dofConfig
-from armlab.protocols.stiffness_5dof_emg.experiment import build_lab, simulate_stages
+from armlab.protocols.stiffness_5dof_emg.experiment import simulate_stages
+from armlab.protocols.stiffness_5dof_emg.lab_effects import apply_recorded_effects, build_effect_lab
 from armlab.protocols.stiffness_5dof_emg.results import estimate_stiffness
 
 __all__ = ["RECORDING_HZ", "format_table", "outputs", "recording_series", "reestimate", "simulate"]
@@ -19,9 +20,10 @@ RECORDING_HZ = 100.0  # Hz, the rate the recording draws the skeleton and wrench
 
 
 def simulate(cfg: Stiffness5dofConfig) -> Simulated:
-    """Simulate the chosen stages; estimation runs when the runner asks for it."""
-    lab = build_lab()
-    trials = simulate_stages(cfg, lab)
+    """Simulate the chosen stages with the switched-on lab effects (:mod:`.lab_effects`);
+    estimation runs when the runner asks for it."""
+    lab = build_effect_lab(cfg)
+    trials = apply_recorded_effects(cfg, simulate_stages(cfg, lab), lab)
     return Simulated(trials, lab.scene.xml, {}, lambda: estimate_stiffness(trials, cfg.estimation))
 
 
