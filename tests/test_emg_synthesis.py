@@ -20,6 +20,7 @@ from armlab.sensors import (
     ChannelSpec,
     EmgSpec,
     crosstalk_matrix,
+    neural_drive,
     synthesize_emg,
 )
 
@@ -128,3 +129,15 @@ def test_bad_input_is_refused():
         EmgSpec(gain_mV=(1.0, 2.0))
     with pytest.raises(ConfigError, match="must be among"):
         crosstalk_matrix(0.1, (("BRAD", "XXX"),))
+
+
+def test_neural_drive_inverts_the_emg_to_activation_relation():
+    """u(a) inverts a = (e^(A u) - 1) / (e^A - 1) (Lloyd and Besier 2003); A = 0 is the identity."""
+    u = np.linspace(0.0, 1.0, 11)
+    for A in (-2.9, -1.5, -0.2):
+        a = np.expm1(A * u) / np.expm1(A)
+        assert_allclose(neural_drive(a, A), u, atol=1e-12)
+        assert np.all(neural_drive(a, A)[1:-1] < a[1:-1])  # activation rises faster than the drive
+    assert_allclose(neural_drive(u, 0.0), u)
+    with pytest.raises(ConfigError, match=r"\(-3, 0\]"):
+        neural_drive(u, -3.0)

@@ -3,9 +3,10 @@ the electrodes recorded alongside the stiffness trials without changing any othe
 amplitude following the simulated drive, the trial file carrying them, and the EMG maps (network
 against linear under both splits) through the run path.
 
-Reduced counts for the CI suite: 4 conditions x 10 disturbances (the least the plan and the
-leave-one-condition-out split accept) and 2 hyper-parameter draws, instead of 8 x 50 and 6; the
-paper-scale figures are in docs/stiffness_5dof_emg.md and the slow test below."""
+Reduced counts: 1-2 conditions x 10 disturbances for the stage's tests (CI), and for the run path
+(marked slow: a run with its outputs and 8 network fits) 4 conditions x 10 disturbances (the least
+the plan and the leave-one-condition-out split accept) and 2 hyper-parameter draws instead of 8 x 50
+and 6; the paper-scale figures are in docs/stiffness_5dof_emg.md."""
 
 from __future__ import annotations
 
@@ -15,6 +16,7 @@ import numpy as np
 import pytest
 
 from armlab.data.h5io import read_trials
+from armlab.errors import ConfigError
 from armlab.models import ARM5_MUSCLES, ELECTRODE_MUSCLES
 from armlab.protocols.compose import compose
 from armlab.protocols.stiffness_5dof_emg.config import EstimationConfig
@@ -60,13 +62,30 @@ def test_emg_amplitude_follows_the_force_task_activation():
         np.testing.assert_allclose(rms, EMG_GAIN_MV * acts[c, cols], rtol=0.04)
 
 
+def test_map_stretch_outside_the_record_is_refused():
+    with pytest.raises(
+        ConfigError, match=r"the EMG map's 400 samples \[0.25, 0.45\] s must lie in the record"
+    ):
+        compose(
+            [
+                f"protocol={NAME}",
+                "stages=[stiffness,emg]",
+                "trials.conditions=[Z+10]",
+                "estimation.emg_map_start_s=0.25",
+            ]
+        )
+    # without the EMG stage the setting is not used, and not refused
+    compose([f"protocol={NAME}", "trials.conditions=[Z+10]", "estimation.emg_map_start_s=0.25"])
+
+
 @pytest.fixture(scope="module")
 def run(tmp_path_factory):
     out = tmp_path_factory.mktemp("stiff5_emg") / "run"
-    results = run_protocol(_cfg("stages=[stiffness,emg]", FOUR), out)
+    results = run_protocol(_cfg("stages=[stiffness,emg]", FOUR, "output.recording=false"), out)
     return out, results
 
 
+@pytest.mark.slow  # the run with every output and 8 network fits: 4-9 s on the 2-core machine
 def test_check_8_through_the_run_path(run):
     out, results = run
     emg = results["emg"]
@@ -91,6 +110,7 @@ def test_check_8_through_the_run_path(run):
     assert saved["emg"]["random_windows"]["ratio"] == emg["random_windows"]["ratio"]
 
 
+@pytest.mark.slow  # shares the run above
 def test_the_trial_file_carries_the_emg_maps(run):
     """The file holds the EMG channel; estimating again from it gives the same maps to the bit."""
     out, results = run

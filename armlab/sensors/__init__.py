@@ -11,6 +11,7 @@ from armlab.sensors.emg import (
     TRIGNO_EMG,
     EmgSpec,
     crosstalk_matrix,
+    neural_drive,
     synthesize_emg,
 )
 from armlab.sensors.presets import (
@@ -64,5 +65,6 @@ __all__ = [
     "TRIGNO_EMG",
     "EmgSpec",
     "crosstalk_matrix",
+    "neural_drive",
     "synthesize_emg",
 ]

@@ -38,6 +38,7 @@ __all__ = [
     "TRIGNO_EMG",
     "EmgSpec",
     "crosstalk_matrix",
+    "neural_drive",
     "synthesize_emg",
 ]
 
@@ -67,6 +68,35 @@ EMG_NEIGHBOURS: tuple[tuple[str, str], ...] = (
 # The electrode's own noise and converter, mV (spec 001: "a few uV of sensor noise" -> 3 uV rms;
 # assumption: a 16-bit converter over an 11 mV range, 11 / 2**16 mV per count, the Trigno's class).
 TRIGNO_EMG = ChannelSpec(noise_std=3e-3, quant_step=11.0 / 2**16)
+
+
+def neural_drive(activation: np.ndarray, shape_factor: float = 0.0) -> np.ndarray:
+    """The neural drive u behind an activation a, the inverse of the EMG-to-activation relation
+    a = (exp(A u) - 1) / (exp(A) - 1) of Lloyd and Besier (2003, J. Biomech. 36: 765-776; their
+    shape factor -3 < A < 0): u = ln(1 + a (exp(A) - 1)) / A, and u = a for A = 0 (the limit).
+
+    The simulated muscles take their activation as the command (MuJoCo ``ctrl``); the electrodes
+    see the drive. Spec 001's default is A = 0 (EMG amplitude proportional to activation); A < 0
+    makes activation rise faster than the EMG at low drive, as measured muscles do.
+
+    Args:
+        activation: (...) in [0, 1].
+        shape_factor: A in (-3, 0].
+
+    Returns:
+        (...) the drive in [0, 1].
+
+    Raises:
+        ConfigError: ``shape_factor`` outside (-3, 0].
+    """
+    if not (isinstance(shape_factor, (int, float, np.floating)) and -3.0 < shape_factor <= 0.0):
+        raise ConfigError(
+            f"the EMG shape factor A must lie in (-3, 0] (Lloyd and Besier 2003), got {shape_factor!r}"
+        )
+    a = np.asarray(activation, dtype=float)
+    if shape_factor == 0.0:
+        return a.copy()
+    return np.log1p(a * np.expm1(shape_factor)) / shape_factor
 
 
 def crosstalk_matrix(

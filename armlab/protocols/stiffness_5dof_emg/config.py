@@ -178,6 +178,10 @@ class EmgConfig:
     gain_mV: float = EMG_GAIN_MV
     # fraction of a neighbouring electrode's muscle picked up (spec 001: 10-20 %)
     crosstalk: float = EMG_CROSSTALK
+    # A of the EMG-to-activation relation a = (e^(A u) - 1) / (e^A - 1) (Lloyd and Besier 2003,
+    # -3 < A < 0): the electrodes see the drive u behind each activation (armlab.sensors.neural_drive);
+    # 0 (spec 001's default): the EMG amplitude is proportional to the activation
+    shape_factor: float = 0.0
 
     def __post_init__(self) -> None:
         check_tuple_lengths(self, "emg")
@@ -189,6 +193,10 @@ class EmgConfig:
         )
         check(self.gain_mV > 0, f"emg.gain_mV must be > 0 mV, got {self.gain_mV}")
         check(0.0 <= self.crosstalk < 0.5, f"emg.crosstalk must lie in [0, 0.5), got {self.crosstalk}")
+        check(
+            -3.0 < self.shape_factor <= 0.0,
+            f"emg.shape_factor must lie in (-3, 0] (Lloyd and Besier 2003), got {self.shape_factor}",
+        )
 
 
 @dataclass(kw_only=True)

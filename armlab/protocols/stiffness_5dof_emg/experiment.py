@@ -39,7 +39,7 @@ from armlab.protocols.stiffness_5dof_emg.calibration import simulate_calibration
 from armlab.protocols.stiffness_5dof_emg.config import Stiffness5dofConfig, trial_timing
 from armlab.protocols.stiffness_5dof_emg.inertial import simulate_inertial
 from armlab.sensors.channel import ChannelSpec
-from armlab.sensors.emg import ELECTRODES, TRIGNO_EMG, EmgSpec, synthesize_emg
+from armlab.sensors.emg import ELECTRODES, TRIGNO_EMG, EmgSpec, neural_drive, synthesize_emg
 from armlab.sensors.presets import Arm5SensorSuite
 from armlab.sim.arm5_force_task import PRELOAD_CONDITIONS, force_task_activations
 from armlab.sim.arm5_measure import MARKER_RATE_HZ, measure_stiffness_record
@@ -109,17 +109,20 @@ def emg_spec(cfg: Stiffness5dofConfig) -> EmgSpec:
 def record_emg(cfg: Stiffness5dofConfig, record, acts: np.ndarray, condition: np.ndarray) -> np.ndarray:
     """The 8 electrodes over every stiffness trial's record, (n_trials, n_samples, 8) mV.
 
-    The drive of each electrode's muscle is the command the simulation applied: with the reflex off
-    the condition's force-task activation, constant over the record (the paper's frozen
-    activation); with it on, the commands the reflex moved, sample by sample. Its own generator
+    The drive of each electrode's muscle is the neural drive behind the command the simulation
+    applied (:func:`armlab.sensors.neural_drive` with ``emg.shape_factor``; the command itself at
+    the default 0): with the reflex off the condition's force-task activation, constant over the
+    record (the paper's frozen activation); with it on, the commands the reflex moved, sample by
+    sample. Its own generator
     (``[seed, 3]``), so the other stages' data do not change with or without it.
     """
     cols = [ARM5_MUSCLES.index(ELECTRODE_MUSCLES[e]) for e in ELECTRODES]
     n_samples = record.channels["true_q"].shape[1]
     if record.muscle_ctrl is not None:
-        drive = record.muscle_ctrl[..., cols]
+        drive = neural_drive(record.muscle_ctrl[..., cols], cfg.emg.shape_factor)
     else:
-        drive = np.broadcast_to(acts[condition][:, None, cols], (condition.size, n_samples, len(cols)))
+        u = neural_drive(acts[:, cols], cfg.emg.shape_factor)
+        drive = np.broadcast_to(u[condition][:, None, :], (condition.size, n_samples, len(cols)))
     return synthesize_emg(drive, record.fs_hz, emg_spec(cfg), np.random.default_rng([cfg.seed, 3]))
 
 
@@ -214,7 +217,11 @@ def simulate_stiffness_stage(cfg: Stiffness5dofConfig, lab: StiffnessLab | None 
         "wrist_tool_com_m": np.asarray(geo.tool_com, float),
         "gravity_ms2": np.asarray(geo.gravity, float),
         **(
-            {"emg_electrodes": list(ELECTRODES), "emg_crosstalk": float(cfg.emg.crosstalk)}
+            {
+                "emg_electrodes": list(ELECTRODES),
+                "emg_crosstalk": float(cfg.emg.crosstalk),
+                "emg_shape_factor": float(cfg.emg.shape_factor),
+            }
             if "emg" in cfg.stages
             else {}
         ),
