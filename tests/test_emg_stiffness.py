@@ -12,6 +12,7 @@ from armlab.errors import DataError
 from armlab.estimation.emg_features import Standardiser, emg_windows, max_features
 from armlab.estimation.emg_stiffness import (
     N_UNIQUE,
+    ValidationSplit,
     fit_linear,
     fit_network,
     lower_entries,
@@ -112,12 +113,21 @@ def test_nrmse_by_hand():
 def test_searches_are_seeded_and_pick_the_best_validation_score():
     rng = np.random.default_rng(5)
     X, Z = _smooth_map_data(120, 3, rng)
-    a = search_network(X[:80], Z[:80], X[80:], Z[80:], np.random.default_rng(6), 2, n_hidden=8)
-    b = search_network(X[:80], Z[:80], X[80:], Z[80:], np.random.default_rng(6), 2, n_hidden=8)
+    split = [ValidationSplit(X=X[:80], Z=Z[:80], X_val=X[80:], Z_val=Z[80:])]
+    a = search_network(split, np.random.default_rng(6), 2, n_hidden=8)
+    b = search_network(split, np.random.default_rng(6), 2, n_hidden=8)
     assert a.params == b.params and np.array_equal(a.model.W1, b.model.W1)
     assert a.val_nrmse == min(s for _, s in a.tried)
-    lin = search_linear(X[:80], Z[:80], X[80:], Z[80:])
+    lin = search_linear(split)
     assert lin.val_nrmse == min(s for _, s in lin.tried)
+    # two splits: each draw scored by the mean of its two validation NRMSEs
+    two = split + [ValidationSplit(X=X[40:], Z=Z[40:], X_val=X[:40], Z_val=Z[:40], scale=np.ones(N_UNIQUE))]
+    lin2 = search_linear(two)
+    r = lin2.params["ridge"]
+    expected = np.mean(
+        [nrmse(fit_linear(sp.X, sp.Z, r).predict(sp.X_val), sp.Z_val, None, sp.scale) for sp in two]
+    )
+    assert lin2.val_nrmse == pytest.approx(expected, rel=1e-12)
 
 
 def test_standardiser_uses_the_training_set():

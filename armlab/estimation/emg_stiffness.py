@@ -39,6 +39,7 @@ __all__ = [
     "LinearMap",
     "NetworkMap",
     "SearchResult",
+    "ValidationSplit",
     "fit_linear",
     "fit_network",
     "lower_entries",
@@ -268,12 +269,31 @@ def nrmse(
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
+class ValidationSplit:
+    """One training set and its validation set, features standardised.
+
+    Attributes:
+        X, Z: (n, n_features) training features, (n, 5, 5) N·m/rad targets.
+        X_val, Z_val: the validation set's.
+        scale: (15,) N·m/rad the NRMSE normaliser (:func:`nrmse`); None: the validation targets'
+            std (needs several conditions among them).
+    """
+
+    X: np.ndarray
+    Z: np.ndarray
+    X_val: np.ndarray
+    Z_val: np.ndarray
+    scale: np.ndarray | None = None
+
+
+@dataclass(frozen=True, kw_only=True, eq=False)
 class SearchResult:
     """The random search's pick.
 
     Attributes:
-        model: the map trained with the best hyper-parameters; params: them;
-        val_nrmse: its validation NRMSE; tried: (params, validation NRMSE) of every draw.
+        model: the map trained with the best hyper-parameters on the first split; params: them;
+        val_nrmse: their validation NRMSE (mean over the splits); tried: (params, validation
+        NRMSE) of every draw.
     """
 
     model: NetworkMap | LinearMap
@@ -282,54 +302,65 @@ class SearchResult:
     tried: tuple[tuple[dict, float], ...]
 
 
+def _search(fit, draws, splits, entries) -> SearchResult:
+    if not splits:
+        raise DataError("the search needs at least one validation split")
+    tried, best = [], None
+    for params in draws:
+        models = [fit(sp, params) for sp in splits]
+        score = float(
+            np.mean(
+                [
+                    nrmse(m.predict(sp.X_val), sp.Z_val, entries, sp.scale)
+                    for m, sp in zip(models, splits, strict=True)
+                ]
+            )
+        )
+        tried.append((params, score))
+        if best is None or score < best[2]:
+            best = (models[0], params, score)
+    return SearchResult(model=best[0], params=best[1], val_nrmse=best[2], tried=tuple(tried))
+
+
 def search_network(
-    X: np.ndarray,
-    Z: np.ndarray,
-    X_val: np.ndarray,
-    Z_val: np.ndarray,
+    splits: list[ValidationSplit],
     rng: np.random.Generator,
     n_draws: int,
     *,
     n_hidden: int = N_HIDDEN,
     entries: np.ndarray | None = None,
-    scale: np.ndarray | None = None,
 ) -> SearchResult:
-    """Random search of the network's hyper-parameters on a validation set (paper Sec. 4.1).
+    """Random search of the network's hyper-parameters on validation sets (paper Sec. 4.1).
 
     Each draw: weight_decay log-uniform in [1e-5, 1e-1], max_iter log-uniform in [30, 300],
     init_scale log-uniform in [0.3, 3] (assumption: the paper gives neither the hyper-parameters
-    nor their ranges); the network with the lowest validation NRMSE (:func:`nrmse` with
-    ``entries`` and ``scale``) is kept.
+    nor their ranges), trained on every split; the draw with the lowest validation NRMSE
+    (:func:`nrmse` with ``entries`` and the split's ``scale``, averaged over the splits) is kept.
     """
-    tried, best = [], None
-    for _ in range(n_draws):
-        params = {
-            "weight_decay": float(10 ** rng.uniform(-5.0, -1.0)),
-            "max_iter": int(round(10 ** rng.uniform(np.log10(30.0), np.log10(300.0)))),
-            "init_scale": float(10 ** rng.uniform(np.log10(0.3), np.log10(3.0))),
-        }
-        model = fit_network(X, Z, rng, n_hidden=n_hidden, **params)
-        score = nrmse(model.predict(X_val), Z_val, entries, scale)
-        tried.append((params, score))
-        if best is None or score < best[2]:
-            best = (model, params, score)
-    return SearchResult(model=best[0], params=best[1], val_nrmse=best[2], tried=tuple(tried))
+
+    def draws():
+        for _ in range(n_draws):
+            yield {
+                "weight_decay": float(10 ** rng.uniform(-5.0, -1.0)),
+                "max_iter": int(round(10 ** rng.uniform(np.log10(30.0), np.log10(300.0)))),
+                "init_scale": float(10 ** rng.uniform(np.log10(0.3), np.log10(3.0))),
+            }
+
+    return _search(
+        lambda sp, params: fit_network(sp.X, sp.Z, rng, n_hidden=n_hidden, **params), draws(), splits, entries
+    )
 
 
 def search_linear(
-    X: np.ndarray,
-    Z: np.ndarray,
-    X_val: np.ndarray,
-    Z_val: np.ndarray,
+    splits: list[ValidationSplit],
     entries: np.ndarray | None = None,
-    scale: np.ndarray | None = None,
     ridges: tuple[float, ...] = tuple(10.0 ** np.arange(-6, 3)),
 ) -> SearchResult:
-    """The ridge parameter on the validation set, over a grid (1e-6 ... 1e2: closed form, so the
+    """The ridge parameter on the validation sets, over a grid (1e-6 ... 1e2: closed form, so the
     whole grid is cheaper than one network)."""
-    tried = []
-    for r in ridges:
-        model = fit_linear(X, Z, r)
-        tried.append(({"ridge": float(r)}, nrmse(model.predict(X_val), Z_val, entries, scale), model))
-    params, score, model = min(tried, key=lambda t: t[1])
-    return SearchResult(model=model, params=params, val_nrmse=score, tried=tuple((p, s) for p, s, _ in tried))
+    return _search(
+        lambda sp, params: fit_linear(sp.X, sp.Z, params["ridge"]),
+        ({"ridge": float(r)} for r in ridges),
+        splits,
+        entries,
+    )

@@ -219,6 +219,9 @@ class EstimationConfig:
     emg_hidden: int = N_HIDDEN
     # hyper-parameter draws of each random search (paper: random search, count not given; assumption)
     emg_search_draws: int = 6
+    # validation conditions of the leave-one-condition-out split's search (assumption; each one a
+    # network fit per draw)
+    emg_loco_validation: int = 3
     # shares of the windows held out as test and validation sets in the random-window split
     # (assumption: the paper names the sets, not their sizes)
     emg_test_fraction: float = 0.2
@@ -238,7 +241,7 @@ class EstimationConfig:
             f"estimation.emg_window_samples must be an integer in [1, {MAP_SAMPLES}] (the map's stretch), "
             f"got {self.emg_window_samples!r}",
         )
-        for name in ("emg_hidden", "emg_search_draws"):
+        for name in ("emg_hidden", "emg_search_draws", "emg_loco_validation"):
             value = getattr(self, name)
             check(
                 isinstance(value, int) and value >= 1,
