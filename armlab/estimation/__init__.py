@@ -32,6 +32,27 @@ from armlab.estimation.criteria import (
     relative_error,
     symmetric_part,
 )
+from armlab.estimation.emg_features import (
+    MAP_SAMPLES,
+    WINDOW_SAMPLES,
+    Standardiser,
+    emg_windows,
+    max_features,
+)
+from armlab.estimation.emg_stiffness import (
+    N_HIDDEN,
+    LinearMap,
+    NetworkMap,
+    SearchResult,
+    ValidationSplit,
+    fit_linear,
+    fit_network,
+    lower_entries,
+    network_loss,
+    nrmse,
+    search_linear,
+    search_network,
+)
 from armlab.estimation.field_adequacy import (
     ADEQUACY_MODELS,
     POLAR_ORDERS,
@@ -188,6 +209,23 @@ from armlab.estimation.virtual_force import (
 )
 
 __all__ = [
+    "MAP_SAMPLES",
+    "WINDOW_SAMPLES",
+    "Standardiser",
+    "emg_windows",
+    "max_features",
+    "N_HIDDEN",
+    "LinearMap",
+    "NetworkMap",
+    "SearchResult",
+    "ValidationSplit",
+    "fit_linear",
+    "fit_network",
+    "lower_entries",
+    "network_loss",
+    "nrmse",
+    "search_linear",
+    "search_network",
     "IKResult",
     "frobenius_residual",
     "inverse_kinematics",
