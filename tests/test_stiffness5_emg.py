@@ -145,3 +145,17 @@ def test_reflex_moved_commands_drive_the_emg():
     # 20 records of 1 s in a 430 Hz band: ~17000 independent samples per half, rms within ~0.5 %
     np.testing.assert_allclose(before, EMG_GAIN_MV * 0.2, rtol=0.03)
     np.testing.assert_allclose(after, EMG_GAIN_MV * 0.4, rtol=0.03)
+
+
+@pytest.mark.slow  # shares the run above
+def test_sparse_filtering_layers_feed_both_maps(run):
+    """With the paper's two sparse-filtering layers (sizes ours: 8, 8) the maps train on their
+    features and every NRMSE is finite and positive."""
+    out, _ = run
+    trials = read_trials(out / "trials.h5")
+    est = EstimationConfig(emg_search_draws=1, emg_sparse_features=[8, 8])
+    emg = estimate_stiffness(trials, est)[0]["emg"]
+    assert "sparse-filtering layers of [8, 8]" in emg["features"]
+    for key in ("random_windows", "leave_one_condition_out"):
+        for name in ("network_nrmse", "linear_nrmse"):
+            assert 0 < emg[key][name] < 10, (key, name, emg[key][name])

@@ -126,6 +126,7 @@ def test_marker_hold_is_causal():
         ("stages=[emg]", r"lacks 'stiffness': the stiffness trials are the run's trial file"),
         ("emg.crosstalk=0.6", r"emg.crosstalk must lie in \[0, 0.5\)"),
         ("emg.shape_factor=-3", r"emg.shape_factor must lie in \(-3, 0\]"),
+        ("estimation.emg_sparse_features=[8,0]", r"estimation.emg_sparse_features must list integers >= 1"),
         ("emg.band_hz=[20,1500]", r"emg.band_hz must be \(low, high\) Hz with 0 < low < high < 1000"),
         (
             "estimation.emg_window_samples=500",

@@ -155,6 +155,11 @@ from armlab.estimation.smoothing import (
     smooth_and_differentiate,
 )
 from armlab.estimation.smoothing import differentiate as sg_differentiate
+from armlab.estimation.sparse_filtering import (
+    SparseFilter,
+    fit_sparse_filter,
+    sparse_filter_loss,
+)
 from armlab.estimation.spd_stiffness import (
     SPDStiffness,
     area_criterion,
@@ -226,6 +231,9 @@ __all__ = [
     "nrmse",
     "search_linear",
     "search_network",
+    "SparseFilter",
+    "fit_sparse_filter",
+    "sparse_filter_loss",
     "IKResult",
     "frobenius_residual",
     "inverse_kinematics",

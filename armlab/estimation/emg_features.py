@@ -5,9 +5,10 @@ full wave rectification and split the data into time windows of length 70 afterw
 picked the maximum along each of the signals followed by two layers of unsupervised feature
 extraction using the approach of [9]" (Ngiam et al., sparse filtering). This module cuts the
 windows (:func:`emg_windows`) and takes the per-channel maximum (:func:`max_features`); the
-sparse-filtering layers are not built (see ``docs/stiffness_5dof_emg.md``: the paper gives neither
-their sizes nor their training; the default phi is the maximum alone) and the features are
-standardised on the training set (:class:`Standardiser`), a preprocessing the paper leaves open.
+sparse-filtering layers are :mod:`armlab.estimation.sparse_filtering` (optional in the protocol:
+the paper gives neither their sizes nor their training, see ``docs/stiffness_5dof_emg.md``), and
+the features are standardised on the training set (:class:`Standardiser`), a preprocessing the
+paper leaves open.
 """
 
 from __future__ import annotations

@@ -215,6 +215,10 @@ class EstimationConfig:
     emg_map_start_s: float = -0.2
     # samples per window (paper Sec. 4.1: "time windows of length 70")
     emg_window_samples: int = WINDOW_SAMPLES
+    # features of each sparse-filtering layer after the maxima (paper Sec. 4.1: "two layers of
+    # unsupervised feature extraction" of Ngiam et al., sizes not given); empty: the maxima alone
+    # (default: docs/stiffness_5dof_emg.md says why)
+    emg_sparse_features: list[int] = field(default_factory=list)
     # softplus units of the hidden layer (paper Sec. 4.1: 100)
     emg_hidden: int = N_HIDDEN
     # hyper-parameter draws of each random search (paper: random search, count not given; assumption)
@@ -240,6 +244,11 @@ class EstimationConfig:
             isinstance(self.emg_window_samples, int) and 1 <= self.emg_window_samples <= MAP_SAMPLES,
             f"estimation.emg_window_samples must be an integer in [1, {MAP_SAMPLES}] (the map's stretch), "
             f"got {self.emg_window_samples!r}",
+        )
+        check(
+            all(isinstance(k, int) and k >= 1 for k in self.emg_sparse_features),
+            f"estimation.emg_sparse_features must list integers >= 1 (features per layer), got "
+            f"{list(self.emg_sparse_features)}",
         )
         for name in ("emg_hidden", "emg_search_draws", "emg_loco_validation"):
             value = getattr(self, name)

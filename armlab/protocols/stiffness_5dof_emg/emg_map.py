@@ -3,7 +3,9 @@
 Each disturbance contributes its 8 electrodes' stretch of 400 samples (200 ms at 2 kHz; where in the
 record: ``estimation.emg_map_start_s``, by default the 200 ms before the onset, the working point
 K_q describes), full-wave rectified and cut into windows of 70 samples (5 per disturbance); each
-window's features are the per-channel maxima (:mod:`armlab.estimation.emg_features`) and its
+window's features are the per-channel maxima (:mod:`armlab.estimation.emg_features`; with
+``estimation.emg_sparse_features`` followed by sparse-filtering layers,
+:mod:`armlab.estimation.sparse_filtering`, trained on each training set) and its
 target the perturbation-estimated K_q of its condition (the SPD estimate of Eqs. (16)-(19)). The
 network of Eq. (20) and the ridge baseline (:mod:`armlab.estimation.emg_stiffness`) are compared by
 NRMSE under two splits (spec 001):
@@ -42,6 +44,7 @@ from armlab.estimation.emg_stiffness import (
     search_linear,
     search_network,
 )
+from armlab.estimation.sparse_filtering import fit_sparse_filter
 from armlab.protocols.stiffness_5dof_emg.config import EstimationConfig
 
 __all__ = [
@@ -88,12 +91,23 @@ def _split_result(net_pred, lin_pred, Z, K_true_w, entries, net_params, lin_para
     }
 
 
+def _phi(F: np.ndarray, train, est: EstimationConfig, rng) -> np.ndarray:
+    """Every window's features from what the training windows teach: the maxima standardised and,
+    with ``estimation.emg_sparse_features``, the sparse-filtering layers (trained on the training
+    windows only) standardised again."""
+    X = Standardiser.fit(F[train])(F)
+    if not est.emg_sparse_features:
+        return X
+    Y = fit_sparse_filter(X[train], tuple(est.emg_sparse_features), rng)(X)
+    return Standardiser.fit(Y[train])(Y)
+
+
 def _random_split(F, Z, K_true_w, entries, est: EstimationConfig, rng) -> dict:
     n = len(F)
     order = rng.permutation(n)
     n_test, n_val = int(round(est.emg_test_fraction * n)), int(round(est.emg_val_fraction * n))
     test, val, train = order[:n_test], order[n_test : n_test + n_val], order[n_test + n_val :]
-    X = Standardiser.fit(F[train])(F)
+    X = _phi(F, train, est, rng)
     split = [ValidationSplit(X=X[train], Z=Z[train], X_val=X[val], Z_val=Z[val])]
     net = search_network(split, rng, est.emg_search_draws, n_hidden=est.emg_hidden, entries=entries)
     lin = search_linear(split, entries)
@@ -108,10 +122,10 @@ def _random_split(F, Z, K_true_w, entries, est: EstimationConfig, rng) -> dict:
     )
 
 
-def _condition_split(F, Z, train, val) -> ValidationSplit:
+def _condition_split(F, Z, train, val, est: EstimationConfig, rng) -> ValidationSplit:
     """Train on ``train``, validate on the condition ``val`` (normalised by the training targets'
     spread: one condition has none)."""
-    X = Standardiser.fit(F[train])(F)
+    X = _phi(F, train, est, rng)
     return ValidationSplit(
         X=X[train], Z=Z[train], X_val=X[val], Z_val=Z[val], scale=lower_entries(Z[train]).std(axis=0)
     )
@@ -123,13 +137,13 @@ def _loco_split(F, Z, K_true_w, cond, n_c, entries, est: EstimationConfig, rng) 
     h0 = int(rng.integers(n_c))
     others = np.array([c for c in range(n_c) if c != h0])
     vals = rng.choice(others, size=min(est.emg_loco_validation, n_c - 3), replace=False)
-    splits = [_condition_split(F, Z, (cond != h0) & (cond != v), cond == v) for v in vals]
+    splits = [_condition_split(F, Z, (cond != h0) & (cond != v), cond == v, est, rng) for v in vals]
     net = search_network(splits, rng, est.emg_search_draws, n_hidden=est.emg_hidden, entries=entries)
     lin = search_linear(splits, entries)
     net_pred, lin_pred = np.empty_like(Z), np.empty_like(Z)
     for h in range(n_c):
         train, test = cond != h, cond == h
-        X = Standardiser.fit(F[train])(F)
+        X = _phi(F, train, est, rng)
         model = fit_network(X[train], Z[train], rng, n_hidden=est.emg_hidden, **net.params)
         net_pred[test] = model.predict(X[test])
         lin_pred[test] = fit_linear(X[train], Z[train], lin.params["ridge"]).predict(X[test])
@@ -178,7 +192,12 @@ def estimate_emg_map(
         "windows_per_disturbance": int(n_win),
         "window_samples": int(est.emg_window_samples),
         "map_start_s": float(est.emg_map_start_s),
-        "features": "per-channel maximum of the rectified window (no sparse filtering)",
+        "features": "per-channel maximum of the rectified window"
+        + (
+            f", then sparse-filtering layers of {list(est.emg_sparse_features)} features"
+            if est.emg_sparse_features
+            else " (no sparse filtering)"
+        ),
         "entries_left_out": [ENTRY_NAMES[k] for k in np.flatnonzero(~entries)],
         "random_windows": random,
         "leave_one_condition_out": loco,
