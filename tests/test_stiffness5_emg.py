@@ -11,6 +11,7 @@ and 6; the paper-scale figures are in docs/stiffness_5dof_emg.md."""
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 
 import numpy as np
 import pytest
@@ -35,10 +36,16 @@ def _cfg(*overrides: str):
     return compose([f"protocol={NAME}", *SMALL, *overrides])[1]
 
 
+def _with_emg(cfg):
+    """``cfg`` with the EMG stage added after composing: the stage's simulation with 1-2 conditions
+    (the maps' 4-condition minimum is checked before a run, not by the simulation)."""
+    return replace(cfg, stages=[*cfg.stages, "emg"])
+
+
 def test_emg_stage_changes_no_other_channel():
     """Its own generator: the stiffness trials are bit-identical with and without the EMG stage."""
     a = simulate_stiffness_stage(_cfg("stages=[stiffness]", "trials.conditions=[Z+10]"), LAB)
-    b = simulate_stiffness_stage(_cfg("stages=[stiffness,emg]", "trials.conditions=[Z+10]"), LAB)
+    b = simulate_stiffness_stage(_with_emg(_cfg("stages=[stiffness]", "trials.conditions=[Z+10]")), LAB)
     assert "emg" not in a.channels and b.channels["emg"].shape == (10, a.n_samples, 8)
     assert b.units["emg"] == "mV" and b.attrs["emg_electrodes"] == list(ELECTRODES)
     for k in a.channels:
@@ -50,7 +57,9 @@ def test_emg_stage_changes_no_other_channel():
 def test_emg_amplitude_follows_the_force_task_activation():
     """Reflex off, the drive is the condition's activation over the whole record: each electrode's
     rms (ideal sensor, no cross-talk) is the gain times its muscle's activation (ground truth)."""
-    cfg = _cfg("stages=[stiffness,emg]", "sensors=ideal", "emg.crosstalk=0", "trials.conditions=[X-10,Z+10]")
+    cfg = _with_emg(
+        _cfg("stages=[stiffness]", "sensors=ideal", "emg.crosstalk=0", "trials.conditions=[X-10,Z+10]")
+    )
     trials = simulate_stiffness_stage(cfg, LAB)
     acts = np.asarray(trials.attrs["ground_truth"]["activation"])
     cols = [ARM5_MUSCLES.index(ELECTRODE_MUSCLES[e]) for e in ELECTRODES]
@@ -60,6 +69,11 @@ def test_emg_amplitude_follows_the_force_task_activation():
         rms = np.sqrt(np.mean(emg[cond == c] ** 2, axis=(0, 1)))  # (8,) mV over 10 trials
         # 10 records of 0.65 s in a 430 Hz band: ~5600 independent samples, rms within ~1 %; 4 %
         np.testing.assert_allclose(rms, EMG_GAIN_MV * acts[c, cols], rtol=0.04)
+
+
+def test_too_few_conditions_for_the_maps_are_refused():
+    with pytest.raises(ConfigError, match=r"the EMG stage's maps need at least 4 conditions"):
+        compose([f"protocol={NAME}", "stages=[stiffness,emg]", "trials.conditions=[Z+10,X-5,X+5]"])
 
 
 def test_map_stretch_outside_the_record_is_refused():
@@ -138,7 +152,9 @@ def test_reflex_moved_commands_drive_the_emg():
         commanded_dq=np.zeros((n, 5)),
         muscle_ctrl=ctrl,
     )
-    cfg = _cfg("stages=[stiffness,emg]", "sensors=ideal", "emg.crosstalk=0", "trials.conditions=[Z+10]")
+    cfg = _with_emg(
+        _cfg("stages=[stiffness]", "sensors=ideal", "emg.crosstalk=0", "trials.conditions=[Z+10]")
+    )
     emg = record_emg(cfg, record, np.zeros((1, 12)), np.zeros(n, int))
     before = np.sqrt(np.mean(emg[:, :half] ** 2, axis=(0, 1)))
     after = np.sqrt(np.mean(emg[:, half:] ** 2, axis=(0, 1)))

@@ -48,6 +48,7 @@ from armlab.estimation.sparse_filtering import fit_sparse_filter
 from armlab.protocols.stiffness_5dof_emg.config import EstimationConfig
 
 __all__ = [
+    "MIN_EMG_CONDITIONS",
     "PAPER_LINEAR_NRMSE",
     "PAPER_NETWORK_NRMSE",
     "PAPER_RATIO",
@@ -57,13 +58,13 @@ __all__ = [
 
 PAPER_NETWORK_NRMSE = 0.3378  # paper Sec. 4.1: "average normalized root mean squared error ... 0.3378"
 PAPER_LINEAR_NRMSE = 0.39  # paper Sec. 4.1: "a linear model never achieved 0.39 or better"
-PAPER_RATIO = (
-    PAPER_NETWORK_NRMSE / PAPER_LINEAR_NRMSE
-)  # 0.866: the network's NRMSE over the linear's, at most
+# 0.866: the network's NRMSE over the linear's, at most (paper Sec. 4.1)
+PAPER_RATIO = PAPER_NETWORK_NRMSE / PAPER_LINEAR_NRMSE
 _JOINTS = ("sh_flex", "sh_abd", "sh_rot", "elbow", "pron")
 _TRIL = np.tril_indices(5)
 ENTRY_NAMES = tuple(f"K[{_JOINTS[i]},{_JOINTS[j]}]" for i, j in zip(*_TRIL, strict=True))
-_MIN_CONDITIONS = 4  # leave-one-out's search: a kept-out, a validation and two training conditions
+# leave-one-out's search: a kept-out, a validation and two training conditions
+MIN_EMG_CONDITIONS = 4
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)
@@ -169,9 +170,9 @@ def estimate_emg_map(
     if "emg" not in trials.channels:
         raise DataError("the trial file has no 'emg' channel: run with 'emg' in stages")
     n_c = len(names)
-    if n_c < _MIN_CONDITIONS:
+    if n_c < MIN_EMG_CONDITIONS:
         raise DataError(
-            f"the EMG maps need at least {_MIN_CONDITIONS} conditions (leave-one-condition-out: test, "
+            f"the EMG maps need at least {MIN_EMG_CONDITIONS} conditions (leave-one-condition-out: test, "
             f"validation and two to train on), the run has {n_c}: {names}"
         )
     fs = trials.fs_hz

@@ -16,6 +16,7 @@ from armlab.estimation.emg_features import MAP_SAMPLES
 from armlab.models.arm5_scene import ARM5_LAB_TIMESTEP_S
 from armlab.models.arm_5dof import load_arm_5dof
 from armlab.protocols.stiffness_5dof_emg.config import Stiffness5dofConfig, trial_timing
+from armlab.protocols.stiffness_5dof_emg.emg_map import MIN_EMG_CONDITIONS
 from armlab.sim.arm5_force_task import PRELOAD_CONDITIONS, force_task_activations
 
 __all__ = ["LAB_FS_HZ", "LAB_INTEGRATOR", "validate"]
@@ -58,6 +59,11 @@ def validate(cfg: Stiffness5dofConfig) -> None:
             f"estimation.emg_map_start_s={start:g} s: the EMG map's {MAP_SAMPLES} samples "
             f"[{start:g}, {end:g}] s must lie in the record [-trials.pre_s, trials.rise_s + trials.hold_s] "
             f"= [{-t.pre_s:g}, {t.rise_s + t.hold_s:g}] s",
+        )
+        check(
+            len(t.conditions) >= MIN_EMG_CONDITIONS,
+            f"the EMG stage's maps need at least {MIN_EMG_CONDITIONS} conditions (leave one condition out: "
+            f"a test, a validation and two training conditions); trials.conditions={list(t.conditions)}",
         )
     arm = load_arm_5dof()
     for name in t.conditions:  # each pre-load must be holdable with activations in [a_min, 1]
