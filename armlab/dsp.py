@@ -33,6 +33,7 @@ from armlab.cpus import usable_cpus
 from armlab.errors import ConfigError, DataError
 
 __all__ = [
+    "bandpass_noise",
     "bilinear",
     "by_row_halves",
     "lowpass_noise",
@@ -375,9 +376,60 @@ def lowpass_noise(
     """
     if not 0 < corner_hz < fs_hz / 2:
         raise ConfigError(f"{name} must lie in (0, {fs_hz / 2}) Hz (Nyquist), got {corner_hz}")
-    sos = butterworth(corner_hz, fs_hz, 2)
-    n_burn = int(math.ceil(burn_in_periods * fs_hz / corner_hz))
-    impulse = np.zeros(int(math.ceil(20.0 * fs_hz / corner_hz)))
+    return _filtered_noise(rng, shape, fs_hz, butterworth(corner_hz, fs_hz, 2), corner_hz, burn_in_periods)
+
+
+def bandpass_noise(
+    rng: np.random.Generator,
+    shape: tuple[int, ...],
+    fs_hz: float,
+    band_hz: tuple[float, float],
+    *,
+    order: int = 2,
+    burn_in_periods: float = 5.0,
+    name: str = "band_hz",
+) -> np.ndarray:
+    """Unit-rms Gaussian noise through a Butterworth band-pass, stationary from sample 0.
+
+    As :func:`lowpass_noise` (same drawing order, blocks and threads, burn-in dropped, divided by
+    the exact white-noise gain so the stationary rms is 1), with the band-pass
+    :func:`butterworth` ``(band_hz, fs_hz, order, btype="bandpass")`` (2 ``order`` poles, -3 dB at
+    both edges); the burn-in and the gain's impulse response are counted in periods of the lower
+    edge (the slowest poles).
+
+    Args:
+        rng: the only source of randomness.
+        shape: (n_rows, n_samples, ...) the output's shape, time on axis 1.
+        fs_hz: Hz, sample rate. band_hz: (low, high) Hz, the -3 dB edges.
+        order: Butterworth order (>= 1). burn_in_periods: periods of ``band_hz[0]`` dropped.
+
+    Raises:
+        ConfigError: the band not ``0 < low < high < fs_hz / 2`` (the message naming ``name``) or
+            ``order`` not a positive integer.
+    """
+    lo, hi = (float(b) for b in band_hz)
+    if not 0 < lo < hi < fs_hz / 2:
+        raise ConfigError(
+            f"{name} must be (low, high) Hz with 0 < low < high < {fs_hz / 2} (Nyquist), got {band_hz}"
+        )
+    if not (isinstance(order, (int, np.integer)) and order >= 1):
+        raise ConfigError(f"the band-pass order must be an integer >= 1, got {order!r}")
+    sos = butterworth((lo, hi), fs_hz, int(order), btype="bandpass")
+    return _filtered_noise(rng, shape, fs_hz, sos, lo, burn_in_periods)
+
+
+def _filtered_noise(
+    rng: np.random.Generator,
+    shape: tuple[int, ...],
+    fs_hz: float,
+    sos: np.ndarray,
+    slow_hz: float,
+    burn_in_periods: float,
+) -> np.ndarray:
+    """White noise filtered by ``sos`` along axis 1 at unit stationary rms (see :func:`lowpass_noise`):
+    burn-in and impulse response counted in periods of ``slow_hz``."""
+    n_burn = int(math.ceil(burn_in_periods * fs_hz / slow_hz))
+    impulse = np.zeros(int(math.ceil(20.0 * fs_hz / slow_hz)))
     impulse[0] = 1.0
     gain = math.sqrt(float(np.sum(signal.sosfilt(sos, impulse) ** 2)))  # output std per unit input
     row_shape = (n_burn + shape[1], *shape[2:])

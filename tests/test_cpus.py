@@ -29,3 +29,18 @@ def test_usable_cpus_without_affinity_call_counts_the_machine(monkeypatch):
     assert usable_cpus() == 3
     monkeypatch.setattr(os, "cpu_count", lambda: None)  # undeterminable: one core
     assert usable_cpus() == 1
+
+
+def test_single_threaded_blas_sets_one_thread_and_restores():
+    import numpy  # noqa: F401  (loads NumPy's OpenBLAS)
+    import scipy.optimize  # noqa: F401  (loads SciPy's)
+
+    from armlab.cpus import _loaded_openblas, single_threaded_blas
+
+    calls = _loaded_openblas()
+    if not calls:
+        pytest.skip("no OpenBLAS found loaded (not Linux, or another BLAS)")
+    before = [get() for get, _ in calls]
+    with single_threaded_blas():
+        assert [get() for get, _ in calls] == [1] * len(calls)
+    assert [get() for get, _ in calls] == before

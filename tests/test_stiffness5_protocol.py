@@ -123,12 +123,15 @@ def test_marker_hold_is_causal():
 @pytest.mark.parametrize(
     ("override", "message"),
     [
+        ("stages=[emg]", r"lacks 'stiffness': the stiffness trials are the run's trial file"),
+        ("emg.crosstalk=0.6", r"emg.crosstalk must lie in \[0, 0.5\)"),
+        ("emg.shape_factor=-3", r"emg.shape_factor must lie in \(-3, 0\]"),
+        ("estimation.emg_sparse_features=[8,0]", r"estimation.emg_sparse_features must list integers >= 1"),
+        ("emg.band_hz=[20,1500]", r"emg.band_hz must be \(low, high\) Hz with 0 < low < high < 1000"),
         (
-            "stages=[emg]",
-            r"stage 'emg' .* not built yet; the stages that exist: "
-            r"\['calibration', 'inertial', 'stiffness'\]",
+            "estimation.emg_window_samples=500",
+            r"estimation.emg_window_samples must be an integer in \[1, 400\]",
         ),
-        ("stages=[stiffness,emg]", r"stage 'emg' .* not built yet"),
         ("stages=[calibration,inertial]", r"lacks 'stiffness': .* containing 'stiffness'"),
         ("stages=[stiffness,stiffness]", r"stages repeats a stage"),
         ("calibration.duration_s=1", r"calibration.duration_s must lie in \[2, 600\] s"),

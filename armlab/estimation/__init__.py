@@ -32,6 +32,27 @@ from armlab.estimation.criteria import (
     relative_error,
     symmetric_part,
 )
+from armlab.estimation.emg_features import (
+    MAP_SAMPLES,
+    WINDOW_SAMPLES,
+    Standardiser,
+    emg_windows,
+    max_features,
+)
+from armlab.estimation.emg_stiffness import (
+    N_HIDDEN,
+    LinearMap,
+    NetworkMap,
+    SearchResult,
+    ValidationSplit,
+    fit_linear,
+    fit_network,
+    lower_entries,
+    network_loss,
+    nrmse,
+    search_linear,
+    search_network,
+)
 from armlab.estimation.field_adequacy import (
     ADEQUACY_MODELS,
     POLAR_ORDERS,
@@ -134,6 +155,11 @@ from armlab.estimation.smoothing import (
     smooth_and_differentiate,
 )
 from armlab.estimation.smoothing import differentiate as sg_differentiate
+from armlab.estimation.sparse_filtering import (
+    SparseFilter,
+    fit_sparse_filter,
+    sparse_filter_loss,
+)
 from armlab.estimation.spd_stiffness import (
     SPDStiffness,
     area_criterion,
@@ -188,6 +214,26 @@ from armlab.estimation.virtual_force import (
 )
 
 __all__ = [
+    "MAP_SAMPLES",
+    "WINDOW_SAMPLES",
+    "Standardiser",
+    "emg_windows",
+    "max_features",
+    "N_HIDDEN",
+    "LinearMap",
+    "NetworkMap",
+    "SearchResult",
+    "ValidationSplit",
+    "fit_linear",
+    "fit_network",
+    "lower_entries",
+    "network_loss",
+    "nrmse",
+    "search_linear",
+    "search_network",
+    "SparseFilter",
+    "fit_sparse_filter",
+    "sparse_filter_loss",
     "IKResult",
     "frobenius_residual",
     "inverse_kinematics",

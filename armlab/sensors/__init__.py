@@ -1,6 +1,19 @@
 """Sensor models applied to clean simulated signals (noise, bias, drift, quantisation, bandwidth, delay)."""
 
 from armlab.sensors.channel import ChannelSpec, apply_channel
+from armlab.sensors.emg import (
+    ELECTRODES,
+    EMG_BAND_HZ,
+    EMG_CROSSTALK,
+    EMG_FS_HZ,
+    EMG_GAIN_MV,
+    EMG_NEIGHBOURS,
+    TRIGNO_EMG,
+    EmgSpec,
+    crosstalk_matrix,
+    neural_drive,
+    synthesize_emg,
+)
 from armlab.sensors.presets import (
     ADXL203_ACCEL,
     CAPSTAN_ENCODER,
@@ -43,4 +56,15 @@ __all__ = [
     "Arm5SensorSuite",
     "VICON_MARKER_POS",
     "VICON_MARKER_QUAT",
+    "ELECTRODES",
+    "EMG_BAND_HZ",
+    "EMG_CROSSTALK",
+    "EMG_FS_HZ",
+    "EMG_GAIN_MV",
+    "EMG_NEIGHBOURS",
+    "TRIGNO_EMG",
+    "EmgSpec",
+    "crosstalk_matrix",
+    "neural_drive",
+    "synthesize_emg",
 ]

@@ -265,6 +265,9 @@ class StiffnessRecord:
             ``true_q`` rad the arm's joint angles (ground truth).
         robot_q_hold: (7,) rad the robot's hold targets.
         commanded_dq: (n_trials, 5) rad the planned displacement of each trial.
+        muscle_ctrl: (n_trials, n_samples, 12) the muscle commands (neural drive, 0..1,
+            ``ARM5_MUSCLES`` order) applied at each step when the reflex moved them; None with the
+            reflex off, when every trial's commands are its condition's activations throughout.
     """
 
     fs_hz: float
@@ -272,6 +275,7 @@ class StiffnessRecord:
     channels: dict[str, np.ndarray]
     robot_q_hold: np.ndarray
     commanded_dq: np.ndarray
+    muscle_ctrl: np.ndarray | None = None
 
 
 def simulate_stiffness_trials(
@@ -344,6 +348,7 @@ def simulate_stiffness_trials(
         base3 = np.ascontiguousarray(acts[plan.condition][:, None, :])
         muscle_cols = np.asarray(scene.muscle_act, dtype=np.intp)
         zero_ref = np.zeros(R.shape[0])
+        muscle_ctrl = np.empty((n, n_steps, muscle_cols.size))
     with mj_rollout.Rollout(nthread=len(datas)) as runner:
         for c0 in range(0, n_steps, chunk):
             m = min(chunk, n_steps - c0)
@@ -364,6 +369,7 @@ def simulate_stiffness_trials(
                     reflex.velocity_gain,
                     reflex.spinal_gain,
                 )
+                muscle_ctrl[:, c0 : c0 + m] = chunk_ctrl[:, :, muscle_cols]
             else:
                 chunk_ctrl = ctrl[:, :m]
             chunk_ctrl[:, :, scene.robot_act] = paths[plan.direction, c0 : c0 + m]
@@ -394,4 +400,5 @@ def simulate_stiffness_trials(
         channels=channels,
         robot_q_hold=robot_q,
         commanded_dq=dirs[plan.direction],
+        muscle_ctrl=muscle_ctrl if reflex_on else None,
     )

@@ -1,14 +1,16 @@
-"""Table and figures of the 5-DoF stiffness protocol (seeds/001: calibration, inertial, stiffness).
+"""Table and figures of the 5-DoF stiffness protocol (seeds/001: calibration, inertial, stiffness, EMG).
 
 - :func:`format_stiffness5_table`: the calibration stage's centre errors and IK RMS, the inertial
   stage's xi_red errors and held-out gravity RMS (when they ran), which chain and xi_red the
   stiffness stage used; per pre-load condition the relative error of K̂_q against the truth, its
   smallest eigenvalue, the ellipsoid's major-axis error and its angle to the pre-load; then spec
-  001's acceptance checks with their tolerances.
+  001's acceptance checks with their tolerances; the EMG maps' NRMSE when that stage ran.
 - :func:`plot_stiffness5_figures`: ``kq_per_condition.png`` (the 15 unique entries of K_q per
   condition: estimate with the least-squares standard error against the truth) and
   ``ellipsoids_xz.png`` (the Fig. 3 stiffness ellipsoids projected on the X-Z plane, at each
-  condition's pre-load force, estimate against truth).
+  condition's pre-load force, estimate against truth) and, when the EMG stage ran,
+  ``emg_nrmse.png`` (the EMG maps' NRMSE, network against linear, under both splits, beside the
+  paper's 0.3378 and 0.39; spec 001 check 8).
 """
 
 from __future__ import annotations
@@ -70,6 +72,25 @@ def format_stiffness5_table(results: Mapping[str, Any]) -> str:
                 "             diagonal K_hat - K_intrinsic (N m/rad): "
                 + " ".join(f"{v:+.2f}" for v in r["diag_bias_vs_intrinsic_Nm_per_rad"])
             )
+    emg = results.get("emg")
+    if emg:
+        paper = emg["paper"]
+        lines.append(
+            f"EMG maps ({emg['n_windows']} windows of {emg['window_samples']} samples; NRMSE network / "
+            f"linear; "
+            f"paper {paper['network_nrmse']:.4g} / never <= {paper['linear_nrmse_at_best']:g}, ratio <= "
+            f"{paper['network_nrmse'] / paper['linear_nrmse_at_best']:.3f})"
+        )
+        for label, key in (
+            ("random windows", "random_windows"),
+            ("leave one condition out", "leave_one_condition_out"),
+        ):
+            sp = emg[key]
+            lines.append(
+                f"  {label:24s} {sp['network_nrmse']:.4f} / {sp['linear_nrmse']:.4f}  "
+                f"ratio {sp['ratio']:.3f}  "
+                f"(vs the true K_q: {sp['network_nrmse_vs_truth']:.4f} / {sp['linear_nrmse_vs_truth']:.4f})"
+            )
     lines.append("spec 001 acceptance checks")
     for c in results.get("checks", []):
         mark = "PASS" if c["passed"] else "FAIL"
@@ -129,19 +150,44 @@ def _plot_ellipses(series: Mapping[str, Any]) -> Figure:
     return fig
 
 
+def _plot_emg_nrmse(emg: Mapping[str, Any]) -> Figure:
+    splits = list(emg["splits"])
+    x = np.arange(len(splits))
+    fig = Figure(figsize=(7, 4.5), constrained_layout=True)
+    ax = fig.add_subplot()
+    net, lin = np.asarray(emg["network"]), np.asarray(emg["linear"])
+    ax.bar(x - 0.18, net, 0.36, color="tab:orange", label="network (100 softplus, K = L L^T)")
+    ax.bar(x + 0.18, lin, 0.36, color="tab:blue", label="linear (ridge)")
+    for i in range(len(splits)):
+        ax.text(x[i], max(net[i], lin[i]) * 1.02, f"ratio {net[i] / lin[i]:.3f}", ha="center", fontsize=8)
+    ax.axhline(emg["paper_network"], color="tab:orange", ls="--", lw=1, label="paper: network 0.3378")
+    ax.axhline(emg["paper_linear"], color="tab:blue", ls=":", lw=1, label="paper: linear never <= 0.39")
+    ax.set_xticks(x, splits)
+    ax.set_ylabel("NRMSE (mean over entries of RMSE / std)")
+    ax.legend(fontsize=8, loc="upper left")
+    ax.set_title("EMG -> K_q on the test set: network vs linear (paper ratio <= 0.866)")
+    return fig
+
+
 def plot_stiffness5_figures(series: Mapping[str, Any], out_dir: str | Path) -> dict[str, Path]:
-    """Write ``kq_per_condition.png`` and ``ellipsoids_xz.png`` into ``out_dir``.
+    """Write ``kq_per_condition.png``, ``ellipsoids_xz.png`` and, with the EMG stage,
+    ``emg_nrmse.png`` into ``out_dir``.
 
     Args:
         series: ``names`` (n_c,), ``K_hat``/``K_ls_std``/``K_true`` (n_c, 5, 5) N m/rad,
-            ``forces`` (n_c, 3) N, ``ellipse_hat``/``ellipse_true`` (n_c, m, 2) N X-Z outlines.
+            ``forces`` (n_c, 3) N, ``ellipse_hat``/``ellipse_true`` (n_c, m, 2) N X-Z outlines;
+            optional ``emg``: ``splits``, ``network``/``linear`` NRMSE per split, ``paper_network``,
+            ``paper_linear``.
         out_dir: the run directory (the files must not exist).
 
     Returns:
-        ``{"kq_per_condition": path, "ellipsoids_xz": path}``.
+        ``{"kq_per_condition": path, "ellipsoids_xz": path}`` (and ``"emg_nrmse": path``).
     """
     out = Path(out_dir)
-    return {
+    written = {
         "kq_per_condition": save_png(_plot_kq(series), out / "kq_per_condition.png"),
         "ellipsoids_xz": save_png(_plot_ellipses(series), out / "ellipsoids_xz.png"),
     }
+    if series.get("emg"):
+        written["emg_nrmse"] = save_png(_plot_emg_nrmse(series["emg"]), out / "emg_nrmse.png")
+    return written

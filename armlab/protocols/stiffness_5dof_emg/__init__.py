@@ -6,7 +6,8 @@ quintic joint-space disturbances; the wrist JR3 and the forearm marker cluster g
 condition by Eqs. (10), (14)-(17), drawn as the Fig. 3 stiffness ellipsoids. Before them the
 kinematic calibration (random motion, joint centres by Eqs. (7)-(9)) gives the chain and the
 inertial trials (40 held configurations, Eq. (22)) give xi_red, which the stiffness estimate uses
-(``stages``); the EMG stage comes later.
+(``stages``); the EMG stage (opt-in) records 8 electrodes during the stiffness trials and maps
+them to K_q by the network of Eqs. (20)-(21) against a linear map (spec 001 check 8).
 """
 
 from armlab.protocols.base import Protocol
@@ -14,6 +15,7 @@ from armlab.protocols.stiffness_5dof_emg import hooks, preflight
 from armlab.protocols.stiffness_5dof_emg.config import (
     CalibrationConfig,
     CuffConfig,
+    EmgConfig,
     EstimationConfig,
     InertialConfig,
     Stiffness5dofConfig,
@@ -26,6 +28,7 @@ __all__ = [
     "PROTOCOL",
     "CalibrationConfig",
     "CuffConfig",
+    "EmgConfig",
     "EstimationConfig",
     "InertialConfig",
     "Stiffness5dofConfig",
@@ -34,7 +37,7 @@ __all__ = [
 
 PROTOCOL = Protocol(
     name="stiffness_5dof_emg",
-    paper="seeds/001: 5-DoF limb stiffness by joint-space perturbations, SPD estimate, EMG (stages 1-3)",
+    paper="seeds/001: 5-DoF limb stiffness by joint-space perturbations, SPD estimate, EMG (stages 1-4)",
     summary="seated 5-DoF arm: calibration, 40 inertial holds, LWR + 6-D cuff, 8 pre-loads x 50 "
     "quintic disturbances; SPD K_q, ellipsoids",
     schema=Stiffness5dofConfig,
@@ -52,6 +55,7 @@ PROTOCOL = Protocol(
     examples=(
         "run protocol=stiffness_5dof_emg sensors=ideal",
         "run protocol=stiffness_5dof_emg stages=[stiffness]",
+        "run protocol=stiffness_5dof_emg stages=[calibration,inertial,stiffness,emg]",
         "run protocol=stiffness_5dof_emg reflex.enabled=true",
         "run protocol=stiffness_5dof_emg trials.n_per_condition=20 trials.conditions=[Z-10,Z+10]",
         "estimate outputs/stiffness_5dof_emg/<run> estimation.post_interval_s=[0.25,0.4]",

@@ -1,12 +1,12 @@
 """The typed experiment of ``stiffness_5dof_emg`` (seeds/001): the groups it reads, nothing else.
 
 ``stages`` picks the paper's protocol stages (Sec. 3): kinematic calibration, inertial trials,
-stiffness trials, EMG maps. Calibration, inertial and stiffness are built (the EMG stage is refused
-with the list of what exists); the stiffness stage is always among them (its trials are the run's
-trial file). ``calibration`` and ``inertial`` set those stages' motion and holds, ``trials`` how the
-stiffness trials are drawn and simulated, ``estimation`` how they are reduced to K_q (the group
-``armlab estimate`` takes). Defaults are the paper's numbers or, where it is silent, spec 001's
-assumptions (each named beside its field).
+stiffness trials, EMG maps; all four are built and the stiffness stage is always among them (its
+trials are the run's trial file; the EMG is recorded alongside them). ``calibration`` and
+``inertial`` set those stages' motion and holds, ``trials`` how the stiffness trials are drawn and
+simulated, ``emg`` the electrodes' signal model, ``estimation`` how the trials are reduced to K_q
+and the EMG maps (the group ``armlab estimate`` takes). Defaults are the paper's numbers or, where
+it is silent, spec 001's assumptions (each named beside its field).
 """
 
 from __future__ import annotations
@@ -16,6 +16,9 @@ from typing import TYPE_CHECKING, Literal, get_args
 
 from armlab.config.schema import ExperimentConfig, ReflexConfig
 from armlab.config.validate import check, check_tuple_lengths, choice
+from armlab.estimation.emg_features import MAP_SAMPLES, WINDOW_SAMPLES
+from armlab.estimation.emg_stiffness import N_HIDDEN
+from armlab.sensors.emg import EMG_BAND_HZ, EMG_CROSSTALK, EMG_FS_HZ, EMG_GAIN_MV
 from armlab.sim.arm5_force_task import A_MIN, PRELOAD_CONDITIONS
 from armlab.sim.arm5_trials import TrialTiming
 
@@ -25,6 +28,8 @@ __all__ = [
     "STAGES",
     "CalibrationConfig",
     "CuffConfig",
+    "DEFAULT_STAGES",
+    "EmgConfig",
     "EstimationConfig",
     "InertialConfig",
     "Stage",
@@ -35,8 +40,10 @@ __all__ = [
 #: The protocol's stages in the paper's order (Sec. 3).
 Stage = Literal["calibration", "inertial", "stiffness", "emg"]
 STAGES: tuple[str, ...] = get_args(Stage)
-#: The stages this package simulates today (the others come with later slices of issue 19).
-BUILT_STAGES: tuple[str, ...] = ("calibration", "inertial", "stiffness")
+#: The stages this package simulates.
+BUILT_STAGES: tuple[str, ...] = ("calibration", "inertial", "stiffness", "emg")
+#: The stages a run has unless ``stages`` says otherwise.
+DEFAULT_STAGES: tuple[str, ...] = ("calibration", "inertial", "stiffness")
 
 if TYPE_CHECKING:
     StageName = Stage
@@ -162,6 +169,38 @@ class TrialsConfig:
 
 
 @dataclass(kw_only=True)
+class EmgConfig:
+    """The EMG electrodes' signal model (armlab.sensors.emg; spec 001's assumption
+    emg = g u n + nu; the sensor noise nu follows ``sensors.preset``)."""
+
+    # Hz, -3 dB band of the carrier (spec 001: the wireless sensor's 20-450 Hz)
+    band_hz: tuple[float, float] = EMG_BAND_HZ
+    # mV rms at full drive (assumption: surface EMG at maximal contraction is 0.1-1 mV)
+    gain_mV: float = EMG_GAIN_MV
+    # fraction of a neighbouring electrode's muscle picked up (spec 001: 10-20 %)
+    crosstalk: float = EMG_CROSSTALK
+    # A of the EMG-to-activation relation a = (e^(A u) - 1) / (e^A - 1) (Lloyd and Besier 2003,
+    # -3 < A < 0): the electrodes see the drive u behind each activation (armlab.sensors.neural_drive);
+    # 0 (spec 001's default): the EMG amplitude is proportional to the activation
+    shape_factor: float = 0.0
+
+    def __post_init__(self) -> None:
+        check_tuple_lengths(self, "emg")
+        lo, hi = self.band_hz
+        check(
+            0.0 < lo < hi < EMG_FS_HZ / 2,
+            f"emg.band_hz must be (low, high) Hz with 0 < low < high < {EMG_FS_HZ / 2:g} (Nyquist of the "
+            f"2 kHz electrodes), got {self.band_hz}",
+        )
+        check(self.gain_mV > 0, f"emg.gain_mV must be > 0 mV, got {self.gain_mV}")
+        check(0.0 <= self.crosstalk < 0.5, f"emg.crosstalk must lie in [0, 0.5), got {self.crosstalk}")
+        check(
+            -3.0 < self.shape_factor <= 0.0,
+            f"emg.shape_factor must lie in (-3, 0] (Lloyd and Besier 2003), got {self.shape_factor}",
+        )
+
+
+@dataclass(kw_only=True)
 class EstimationConfig:
     """How the stiffness trials are reduced to K_q (Eqs. (10), (14)-(17); Fig. 3)."""
 
@@ -171,6 +210,27 @@ class EstimationConfig:
     post_interval_s: tuple[float, float] = (0.2, 0.4)
     # m, the displacement sphere mapped to the force ellipsoid (paper Fig. 3: 5 mm)
     ellipsoid_radius_m: float = 0.005
+    # s from the onset where each disturbance's EMG map stretch of 400 samples starts (paper Sec. 4.1:
+    # "50 sets of 8x400"; where is not given; assumption: the 200 ms before the onset, the working
+    # point K_q describes, like pre_interval_s)
+    emg_map_start_s: float = -0.2
+    # samples per window (paper Sec. 4.1: "time windows of length 70")
+    emg_window_samples: int = WINDOW_SAMPLES
+    # features of each sparse-filtering layer after the maxima (paper Sec. 4.1: "two layers of
+    # unsupervised feature extraction" of Ngiam et al., sizes not given); empty: the maxima alone
+    # (default: docs/stiffness_5dof_emg.md says why)
+    emg_sparse_features: list[int] = field(default_factory=list)
+    # softplus units of the hidden layer (paper Sec. 4.1: 100)
+    emg_hidden: int = N_HIDDEN
+    # hyper-parameter draws of each random search (paper: random search, count not given; assumption)
+    emg_search_draws: int = 6
+    # validation conditions of the leave-one-condition-out split's search (assumption; each one a
+    # network fit per draw)
+    emg_loco_validation: int = 3
+    # shares of the windows held out as test and validation sets in the random-window split
+    # (assumption: the paper names the sets, not their sizes)
+    emg_test_fraction: float = 0.2
+    emg_val_fraction: float = 0.2
 
     def __post_init__(self) -> None:
         check_tuple_lengths(self, "estimation")
@@ -181,6 +241,25 @@ class EstimationConfig:
             self.ellipsoid_radius_m > 0,
             f"estimation.ellipsoid_radius_m must be > 0 m, got {self.ellipsoid_radius_m}",
         )
+        check(
+            isinstance(self.emg_window_samples, int) and 1 <= self.emg_window_samples <= MAP_SAMPLES,
+            f"estimation.emg_window_samples must be an integer in [1, {MAP_SAMPLES}] (the map's stretch), "
+            f"got {self.emg_window_samples!r}",
+        )
+        check(
+            all(isinstance(k, int) and k >= 1 for k in self.emg_sparse_features),
+            f"estimation.emg_sparse_features must list integers >= 1 (features per layer), got "
+            f"{list(self.emg_sparse_features)}",
+        )
+        for name in ("emg_hidden", "emg_search_draws", "emg_loco_validation"):
+            value = getattr(self, name)
+            check(
+                isinstance(value, int) and value >= 1,
+                f"estimation.{name} must be an integer >= 1, got {value!r}",
+            )
+        for name in ("emg_test_fraction", "emg_val_fraction"):
+            value = getattr(self, name)
+            check(0.05 <= value <= 0.4, f"estimation.{name} must lie in [0.05, 0.4], got {value}")
 
 
 @dataclass(kw_only=True)
@@ -204,12 +283,14 @@ class Stiffness5dofConfig(ExperimentConfig):
     """The seated 5-DoF arm perturbed by the LWR through a 6-D cuff (seeds/001)."""
 
     protocol_name: str = "stiffness_5dof_emg"
-    # the stages to run (paper Sec. 3; run in the paper's order); only BUILT_STAGES exist today.
-    # Without calibration the stiffness stage uses the true chain, without inertial the true xi_red
-    stages: list[str] = field(default_factory=lambda: list(BUILT_STAGES))
+    # the stages to run (paper Sec. 3; run in the paper's order). Without calibration the stiffness
+    # stage uses the true chain, without inertial the true xi_red; emg records the electrodes during
+    # the stiffness trials and maps them to K_q (off by default: its training adds ~10 s)
+    stages: list[str] = field(default_factory=lambda: list(DEFAULT_STAGES))
     calibration: CalibrationConfig = field(default_factory=CalibrationConfig)
     inertial: InertialConfig = field(default_factory=InertialConfig)
     trials: TrialsConfig = field(default_factory=TrialsConfig)
+    emg: EmgConfig = field(default_factory=EmgConfig)
     estimation: EstimationConfig = field(default_factory=EstimationConfig)
     # the stretch reflex (armlab.sim.arm5_reflex): the conditioning lab's law, gains and latencies
     # (paper 000 Sec. II-B; armlab.config.schema.ReflexConfig), OFF by default: the paper's model
@@ -223,17 +304,12 @@ class Stiffness5dofConfig(ExperimentConfig):
         check(len(self.stages) > 0, f"stages is empty; choose from {list(BUILT_STAGES)}")
         for stage in self.stages:
             choice("stages", stage, Stage)
-            check(
-                stage in BUILT_STAGES,
-                f"stage {stage!r} of the paper's protocol is not built yet; the stages that exist: "
-                f"{list(BUILT_STAGES)} (of the paper's {list(STAGES)})",
-            )
         check(len(set(self.stages)) == len(self.stages), f"stages repeats a stage: {list(self.stages)}")
         check(
             "stiffness" in self.stages,
             f"stages={list(self.stages)} lacks 'stiffness': the stiffness trials are the run's trial "
-            f"file, the calibration and inertial stages feed them; valid: a subset of "
-            f"{list(BUILT_STAGES)} containing 'stiffness'",
+            f"file, the calibration and inertial stages feed them, the EMG is recorded during them; "
+            f"valid: a subset of {list(BUILT_STAGES)} containing 'stiffness'",
         )
 
 

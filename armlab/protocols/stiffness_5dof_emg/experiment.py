@@ -33,11 +33,13 @@ from armlab.estimation.stiffness_trials import WristSensorGeometry
 from armlab.models.arm5_free import build_arm5_free_scene
 from armlab.models.arm5_scene import Arm5Scene, build_arm5_scene
 from armlab.models.arm5_truth import analytic_damping, analytic_stiffness, inertial_truth
-from armlab.models.arm_5dof import Arm5Dof, limb_kinematics, load_arm_5dof
+from armlab.models.arm_5dof import ARM5_MUSCLES, ELECTRODE_MUSCLES, Arm5Dof, limb_kinematics, load_arm_5dof
 from armlab.models.limb_kinematics import LimbKinematics
 from armlab.protocols.stiffness_5dof_emg.calibration import simulate_calibration
 from armlab.protocols.stiffness_5dof_emg.config import Stiffness5dofConfig, trial_timing
 from armlab.protocols.stiffness_5dof_emg.inertial import simulate_inertial
+from armlab.sensors.channel import ChannelSpec
+from armlab.sensors.emg import ELECTRODES, TRIGNO_EMG, EmgSpec, neural_drive, synthesize_emg
 from armlab.sensors.presets import Arm5SensorSuite
 from armlab.sim.arm5_force_task import PRELOAD_CONDITIONS, force_task_activations
 from armlab.sim.arm5_measure import MARKER_RATE_HZ, measure_stiffness_record
@@ -51,7 +53,9 @@ __all__ = [
     "CHANNEL_UNITS",
     "StiffnessLab",
     "build_lab",
+    "emg_spec",
     "hold_markers",
+    "record_emg",
     "simulate_stages",
     "simulate_stiffness_stage",
 ]
@@ -93,6 +97,33 @@ def hold_markers(frames: np.ndarray, step: int, n_samples: int) -> np.ndarray:
 
 def _suite(cfg: Stiffness5dofConfig) -> Arm5SensorSuite:
     return Arm5SensorSuite.ideal() if cfg.sensors.preset == "ideal" else Arm5SensorSuite.realistic()
+
+
+def emg_spec(cfg: Stiffness5dofConfig) -> EmgSpec:
+    """The electrodes of ``cfg.emg``; their own noise and converter per ``sensors.preset``."""
+    e = cfg.emg
+    sensor = ChannelSpec.ideal() if cfg.sensors.preset == "ideal" else TRIGNO_EMG
+    return EmgSpec(band_hz=tuple(e.band_hz), gain_mV=e.gain_mV, crosstalk=e.crosstalk, sensor=sensor)
+
+
+def record_emg(cfg: Stiffness5dofConfig, record, acts: np.ndarray, condition: np.ndarray) -> np.ndarray:
+    """The 8 electrodes over every stiffness trial's record, (n_trials, n_samples, 8) mV.
+
+    The drive of each electrode's muscle is the neural drive behind the command the simulation
+    applied (:func:`armlab.sensors.neural_drive` with ``emg.shape_factor``; the command itself at
+    the default 0): with the reflex off the condition's force-task activation, constant over the
+    record (the paper's frozen activation); with it on, the commands the reflex moved, sample by
+    sample. Its own generator
+    (``[seed, 3]``), so the other stages' data do not change with or without it.
+    """
+    cols = [ARM5_MUSCLES.index(ELECTRODE_MUSCLES[e]) for e in ELECTRODES]
+    n_samples = record.channels["true_q"].shape[1]
+    if record.muscle_ctrl is not None:
+        drive = neural_drive(record.muscle_ctrl[..., cols], cfg.emg.shape_factor)
+    else:
+        u = neural_drive(acts[:, cols], cfg.emg.shape_factor)
+        drive = np.broadcast_to(u[condition][:, None, :], (condition.size, n_samples, len(cols)))
+    return synthesize_emg(drive, record.fs_hz, emg_spec(cfg), np.random.default_rng([cfg.seed, 3]))
 
 
 def simulate_stages(cfg: Stiffness5dofConfig, lab: StiffnessLab | None = None) -> TrialSet:
@@ -142,6 +173,10 @@ def simulate_stiffness_stage(cfg: Stiffness5dofConfig, lab: StiffnessLab | None 
     channels["forearm_marker_pos"] = hold_markers(meas.marker_pos, step, n_samples)
     channels["forearm_marker_quat"] = hold_markers(meas.marker_quat, step, n_samples)
     channels["true_q"] = record.channels["true_q"]
+    units = dict(CHANNEL_UNITS)
+    if "emg" in cfg.stages:
+        channels["emg"] = record_emg(cfg, record, acts, plan.condition)
+        units["emg"] = "mV"
     geo = WristSensorGeometry.from_scene(scene)
     K_int = analytic_stiffness(arm, acts)
     K_reflex = np.array(
@@ -181,6 +216,15 @@ def simulate_stiffness_stage(cfg: Stiffness5dofConfig, lab: StiffnessLab | None 
         "wrist_tool_mass_kg": geo.tool_mass,
         "wrist_tool_com_m": np.asarray(geo.tool_com, float),
         "gravity_ms2": np.asarray(geo.gravity, float),
+        **(
+            {
+                "emg_electrodes": list(ELECTRODES),
+                "emg_crosstalk": float(cfg.emg.crosstalk),
+                "emg_shape_factor": float(cfg.emg.shape_factor),
+            }
+            if "emg" in cfg.stages
+            else {}
+        ),
         "ground_truth": {
             "activation": acts,
             # linear muscles with constant moment arms: K_q = sum a_i k_i r_i r_i^T + K_passive,
@@ -200,7 +244,7 @@ def simulate_stiffness_stage(cfg: Stiffness5dofConfig, lab: StiffnessLab | None 
         fs_hz=record.fs_hz,
         onset_index=np.full(plan.n_trials, record.onset_index),
         channels=channels,
-        units=dict(CHANNEL_UNITS),
+        units=units,
         trial_meta={
             "condition": plan.condition.astype(np.int64),
             "direction": plan.direction.astype(np.int64),

@@ -2,7 +2,8 @@
 
 Run by :func:`armlab.protocols.compose.compose`, so ``armlab run`` refuses before its run folder
 exists: the lab's fixed physics step and recording rate (the composed lab's MJCF sets them), the
-averaging intervals against the trial's record, and the force task of every chosen condition.
+averaging intervals and the EMG map's stretch against the trial's record, and the force task of
+every chosen condition.
 """
 
 from __future__ import annotations
@@ -11,9 +12,11 @@ import numpy as np
 
 from armlab.config.validate import check
 from armlab.errors import ConfigError
+from armlab.estimation.emg_features import MAP_SAMPLES
 from armlab.models.arm5_scene import ARM5_LAB_TIMESTEP_S
 from armlab.models.arm_5dof import load_arm_5dof
 from armlab.protocols.stiffness_5dof_emg.config import Stiffness5dofConfig, trial_timing
+from armlab.protocols.stiffness_5dof_emg.emg_map import MIN_EMG_CONDITIONS
 from armlab.sim.arm5_force_task import PRELOAD_CONDITIONS, force_task_activations
 
 __all__ = ["LAB_FS_HZ", "LAB_INTEGRATOR", "validate"]
@@ -49,6 +52,19 @@ def validate(cfg: Stiffness5dofConfig) -> None:
             f"rise_s, hold_s: {exc}"
         ) from None
     t = cfg.trials
+    if "emg" in cfg.stages:
+        start, end = cfg.estimation.emg_map_start_s, cfg.estimation.emg_map_start_s + MAP_SAMPLES / LAB_FS_HZ
+        check(
+            -t.pre_s - 1e-12 <= start and end <= t.rise_s + t.hold_s + 1e-12,
+            f"estimation.emg_map_start_s={start:g} s: the EMG map's {MAP_SAMPLES} samples "
+            f"[{start:g}, {end:g}] s must lie in the record [-trials.pre_s, trials.rise_s + trials.hold_s] "
+            f"= [{-t.pre_s:g}, {t.rise_s + t.hold_s:g}] s",
+        )
+        check(
+            len(t.conditions) >= MIN_EMG_CONDITIONS,
+            f"the EMG stage's maps need at least {MIN_EMG_CONDITIONS} conditions (leave one condition out: "
+            f"a test, a validation and two training conditions); trials.conditions={list(t.conditions)}",
+        )
     arm = load_arm_5dof()
     for name in t.conditions:  # each pre-load must be holdable with activations in [a_min, 1]
         try:

@@ -1,5 +1,5 @@
 """The run's estimation and its acceptance checks (seed paper 001; spec 001 checks 1, 2, 4, 5, 6,
-9), from a :class:`~armlab.data.trial.TrialSet` written by :mod:`.experiment` alone.
+8, 9), from a :class:`~armlab.data.trial.TrialSet` written by :mod:`.experiment` alone.
 
 The stages feed each other as in the paper (Sec. 2): the kinematic calibration
 (:mod:`.calibration`, ``attrs['calibration']``) gives the chain, the inertial trials
@@ -9,7 +9,8 @@ both. A stage left out of the run is replaced by the truth (the true chain, the 
 (every ``fs_hz / marker_fs_hz``-th sample: the frames the Vicon delivered), the wrist JR3, Eq. (10)'s
 inverse kinematics and J_limb on the chain, G(q) from xi_red, Eqs. (14)-(17)
 (:func:`armlab.estimation.condition_stiffness`), the Fig. 3 ellipsoids, and the errors against the
-truth (the true ellipsoid on the true chain).
+truth (the true ellipsoid on the true chain). When the EMG stage ran, its maps are trained on these
+K_q (:mod:`.emg_map`, check 8).
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from armlab.models.arm5_truth import gravity_stiffness
 from armlab.models.arm_5dof import limb_kinematics, load_arm_5dof
 from armlab.protocols.stiffness_5dof_emg.calibration import estimate_calibration
 from armlab.protocols.stiffness_5dof_emg.config import EstimationConfig
+from armlab.protocols.stiffness_5dof_emg.emg_map import estimate_emg_map
 from armlab.protocols.stiffness_5dof_emg.inertial import estimate_inertial
 from armlab.sim.arm5_trials import directions
 
@@ -243,6 +245,10 @@ def estimate_stiffness(trials: TrialSet, est: EstimationConfig) -> tuple[dict, d
             },
         ]
     )
+    emg = None
+    if "emg" in ch:  # the EMG stage ran: its maps against the K_q just estimated (check 8)
+        emg = estimate_emg_map(trials, np.array(K_hat), K_true, names, est)
+        checks += emg.checks
     results = {
         "protocol": str(_attr(trials, "protocol")),
         "stages": [str(s) for s in _attr(trials, "stages")],
@@ -255,6 +261,8 @@ def estimate_stiffness(trials: TrialSet, est: EstimationConfig) -> tuple[dict, d
         "reflex": reflex_on,
         "truth": "effective (intrinsic + static reflex)" if reflex_on else "intrinsic (activations frozen)",
     }
+    if emg is not None:
+        results["emg"] = emg.results
     series = {
         "names": names,
         "forces": forces,
@@ -267,4 +275,6 @@ def estimate_stiffness(trials: TrialSet, est: EstimationConfig) -> tuple[dict, d
         "surface_hat": np.array(surf_hat),
         "surface_true": np.array(surf_true),
     }
+    if emg is not None:
+        series["emg"] = emg.series
     return results, series
