@@ -11,7 +11,9 @@ reading in the thesis's frame), and the trial_meta ``case``, ``stop``, ``n_logge
 
 Velocity is the file's ``hand_vel`` channel where it has one (level B writes the central
 differences of its encoders' position; level A the generator's exact ``q̇_h``), else the central
-differences of ``hand_pos``; acceleration is the central differences of the velocity. Scoring
+differences of ``hand_pos``. It is low-passed where the position's own noise outgrows the
+perturbation's spectrum below the band (:mod:`.position_noise`: the cut-off is read from the
+data). Acceleration is the central differences of that velocity. Scoring
 rows are every logged sample of every trial, both axes, after a zero-phase low-pass at ``band_hz``
 (4th order forward-backward, the same filter on the force and on every model column, so a linear
 model stays linear). Whole sequences are held
@@ -31,7 +33,9 @@ is the noise's *white* part: a noise low-passed before it is sampled (gauge nois
 sensor's filter) has second differences far below ``6σ²`` (2 % of the truth through a 125 Hz
 2nd-order filter), and a per-trial offset (the JR3 model's 0.1 N after taring) has none at all.
 It is never taken below :data:`MIN_FLOOR` of the force's power: on noise-free data (level A)
-the gap is round-off, which no effect explains.
+the gap is round-off, which no effect explains. The position sensor's white noise, read the same
+way from ``hand_pos``, adds its share through the nominal field (:attr:`CartSet.row_noise_var`,
+:mod:`.position_noise`).
 """
 
 from __future__ import annotations
@@ -46,6 +50,11 @@ from armlab.dsp import butterworth, lowpass_zero_phase, zero_phase
 from armlab.errors import DataError, EstimationError
 from armlab.estimation.sqrt_damping_fit import fit_sqrt_damping_field
 from armlab.models.cartesian_field import quadratic_basis
+from armlab.protocols.cartesian_online.diagnosis.position_noise import (
+    differentiated_gain,
+    smooth_velocity,
+    snr_cutoff_hz,
+)
 
 __all__ = [
     "AXES",
@@ -160,6 +169,11 @@ class CartSet:
             sequences by the protocol's estimator (D = δ√K, 12 + 2 parameters).
         noise_var: (2,) N², white force-noise variance per axis (raw rate).
         noise_gain: the band filter's white-noise variance gain.
+        pos_noise_var: (2,) m², white position-noise variance per axis (raw rate).
+        vel_cutoff_hz: (2,) Hz, the velocity's smoothing cut-off per axis (``inf``: none; applied
+            only below ``band_hz``).
+        vel_gain: (2,) (m/s)² per m², white position noise's variance gain into the velocity
+            column (central difference, smoothing, band).
         names: (m,) trial labels.
     """
 
@@ -182,6 +196,9 @@ class CartSet:
     delta0: np.ndarray
     noise_var: np.ndarray
     noise_gain: float
+    pos_noise_var: np.ndarray
+    vel_cutoff_hz: np.ndarray
+    vel_gain: np.ndarray
     names: tuple[str, ...]
 
     @property
@@ -226,8 +243,13 @@ class CartSet:
 
     @cached_property
     def row_noise_var(self) -> np.ndarray:
-        """N², band-limited noise variance of each row."""
-        return self.noise_var[self.row_axis] * self.noise_gain
+        """N², band-limited noise variance of each row: the force's white noise, plus the position's
+        through the nominal field, ``σ_e²·(K̂₀(q)²·g_band + δ₀²K̂₀(q)·g_v)`` (:mod:`.position_noise`;
+        the cross term is zero: one impulse response is even, the other odd)."""
+        k = self.rows(np.maximum(quadratic_basis(self.q) @ self.k0.T, 0.0))  # (rows,) N/m, K̂₀ at q
+        ax = self.row_axis
+        eiv = self.pos_noise_var[ax] * (k**2 * self.noise_gain + self.delta0[ax] ** 2 * k * self.vel_gain[ax])
+        return self.noise_var[ax] * self.noise_gain + eiv
 
 
 def _phase_labels(p: np.ndarray, valid: np.ndarray) -> np.ndarray:
@@ -278,6 +300,9 @@ def prepare_cart(trials, *, band_hz: float) -> CartSet:
         v = np.asarray(trials.channels["hand_vel"], float)[rows]
     else:
         v = np.gradient(q, 1.0 / fs, axis=1)
+    pos_noise_var = white_noise_var(q, valid)
+    vel_cutoff = snr_cutoff_hz(p, valid, pos_noise_var, fs)
+    v = smooth_velocity(v, fs, vel_cutoff, band_hz)
     a = np.gradient(v, 1.0 / fs, axis=1)
     force = ch["hand_force"]
     # the sequence of each trial: its stop, or the distinct reference positions in time order
@@ -333,5 +358,8 @@ def prepare_cart(trials, *, band_hz: float) -> CartSet:
         delta0=np.array([f.delta for f in fits]),
         noise_var=noise_var,
         noise_gain=_noise_gain(fs, band_hz),
+        pos_noise_var=pos_noise_var,
+        vel_cutoff_hz=vel_cutoff,
+        vel_gain=np.array([differentiated_gain(fs, band_hz, float(fc)) for fc in vel_cutoff]),
         names=names,
     )

@@ -147,7 +147,12 @@ def diagnose_cart(trials, cfg: DiagnosisConfig) -> tuple[dict, dict]:
             "added": [{"effects": s["effects"], "held_out_gap": s["held_out_gap"]} for s in stages[1:]],
             "noise_floor": floor,
             "noise_source": "second differences of the raw force (white noise assumed), trimmed mean "
-            "per axis, through the band's zero-phase filter",
+            "per axis, through the band's zero-phase filter; plus the position's white noise (the "
+            "same estimator on hand_pos) through the nominal field, K^2 and delta^2 K times the "
+            "band's and the smoothed differentiator's gains",
+            "velocity_cutoff_hz": [
+                float(f) if np.isfinite(f) and f < cfg.band_hz else None for f in cs.vel_cutoff_hz
+            ],
         },
         "where": {
             "windows": stages[0]["windows"],
