@@ -94,7 +94,7 @@ def trial_folder(tmp_path):
         (
             ["data={data}", "protocol=fractional_elbow"],
             "protocol 'fractional_elbow' cannot be diagnosed; valid: "
-            "['conditioning_window', 'joint_1dof', 'cartesian_online']",
+            "['conditioning_window', 'joint_1dof', 'cartesian_online', 'stiffness_5dof_emg']",
         ),
         (
             ["data={data}/missing", "protocol=joint_1dof"],
@@ -142,7 +142,8 @@ def test_diagnose_argument_errors(args, message, trial_folder, tmp_path, capsys)
     [
         (
             ["referee.protocol=x"],
-            "unknown protocol 'x'; valid: ['conditioning_window', 'joint_1dof', 'cartesian_online']",
+            "unknown protocol 'x'; valid: "
+            "['conditioning_window', 'joint_1dof', 'cartesian_online', 'stiffness_5dof_emg']",
         ),
         (
             ["referee.classes=[nope]"],

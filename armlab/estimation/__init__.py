@@ -41,6 +41,7 @@ from armlab.estimation.emg_features import (
 )
 from armlab.estimation.emg_stiffness import (
     N_HIDDEN,
+    N_UNIQUE,
     LinearMap,
     NetworkMap,
     SearchResult,
@@ -156,6 +157,7 @@ from armlab.estimation.smoothing import (
 )
 from armlab.estimation.smoothing import differentiate as sg_differentiate
 from armlab.estimation.sparse_filtering import (
+    SPARSE_EPS,
     SparseFilter,
     fit_sparse_filter,
     sparse_filter_loss,
@@ -220,6 +222,7 @@ __all__ = [
     "emg_windows",
     "max_features",
     "N_HIDDEN",
+    "N_UNIQUE",
     "LinearMap",
     "NetworkMap",
     "SearchResult",
@@ -231,6 +234,7 @@ __all__ = [
     "nrmse",
     "search_linear",
     "search_network",
+    "SPARSE_EPS",
     "SparseFilter",
     "fit_sparse_filter",
     "sparse_filter_loss",
