@@ -9,14 +9,13 @@ signals for the figures out.
 
 from __future__ import annotations
 
-from dataclasses import asdict
-
 import numpy as np
 
 from armlab.config.diagnosis import DiagnosisConfig
-from armlab.diagnosis.attribution import held_out_gap, select_candidates, select_effects
+from armlab.diagnosis.attribution import select_candidates, select_effects
 from armlab.diagnosis.families import FittedModel
 from armlab.diagnosis.localise import WINDOWS_MS, masked_gap, trial_band_breakdown
+from armlab.diagnosis.summary import gap_section, row_floor, stage_entry, verdict_section
 from armlab.protocols.cartesian_online.diagnosis.data import AXES, CartSet, prepare_cart
 from armlab.protocols.cartesian_online.diagnosis.models import CART_FAMILY, CART_SURROGATES
 from armlab.protocols.cartesian_online.diagnosis.rules import RULES
@@ -94,12 +93,9 @@ def _residual_tests(cs: CartSet, resid: np.ndarray, max_lag_s: float = 0.05) -> 
 
 
 def _stage(cs: CartSet, y: np.ndarray, model: FittedModel, floor: float) -> dict:
-    gap, _, _ = held_out_gap(model, (cs,), [y])
+    entry, _ = stage_entry(model, (cs,), [y], floor)
     return {
-        "effects": list(model.effects),
-        "held_out_gap": gap,
-        "held_out_vaf_percent": 100.0 * (1.0 - gap),
-        "noise_floor": floor,
+        **entry,
         **_breakdowns(cs, y, model.residuals[0]),
         "parameters": dict(zip(model.linear_names, map(float, model.beta[0]), strict=True)),
         "nonlinear_parameters": dict(model.theta),
@@ -121,7 +117,7 @@ def diagnose_cart(trials, cfg: DiagnosisConfig) -> tuple[dict, dict]:
     names = cart_candidates(cfg)
     cs = prepare_cart(trials, band_hz=cfg.band_hz)
     y = cs.y
-    floor = float(np.sum(cs.row_noise_var[cs.held])) / float(np.sum(y[cs.held] ** 2))
+    floor = row_floor(cs, y)
     sel = select_effects(
         (cs,),
         [y],
@@ -133,19 +129,14 @@ def diagnose_cart(trials, cfg: DiagnosisConfig) -> tuple[dict, dict]:
         family=CART_FAMILY,
     )
     stages = [_stage(cs, y, m, floor) for m in sel.stages]
-    strip = sel.ranking_steps()
+    metric = (
+        "held-out residual power / measured force power, every logged sample, both axes, "
+        f"0-{cfg.band_hz:g} Hz (1 - VAF)"
+    )
     results = {
-        "protocol": "cartesian_online",
-        "settings": asdict(cfg),
-        "verdict": sel.verdict,
-        "ranking": strip[0] if strip else [],
-        "ranking_steps": strip,
+        **verdict_section("cartesian_online", cfg, sel),
         "gap": {
-            "metric": "held-out residual power / measured force power, every logged sample, both axes, "
-            f"0-{cfg.band_hz:g} Hz (1 - VAF)",
-            "nominal": stages[0]["held_out_gap"],
-            "added": [{"effects": s["effects"], "held_out_gap": s["held_out_gap"]} for s in stages[1:]],
-            "noise_floor": floor,
+            **gap_section(metric, stages, floor),
             "noise_source": "second differences of the raw force (white noise assumed), trimmed mean "
             "per axis, through the band's zero-phase filter; plus the position's white noise (the "
             "same estimator on hand_pos) through the nominal field, K^2 and delta^2 K times the "

@@ -8,14 +8,13 @@ Pure computation: a trial set and a :class:`DiagnosisConfig` in, a JSON-ready re
 
 from __future__ import annotations
 
-from dataclasses import asdict
-
 import numpy as np
 
 from armlab.config.diagnosis import DiagnosisConfig
-from armlab.diagnosis.attribution import held_out_gap, select_candidates, select_effects
+from armlab.diagnosis.attribution import select_candidates, select_effects
 from armlab.diagnosis.families import FittedModel
 from armlab.diagnosis.localise import WINDOWS_MS, masked_gap, trial_band_breakdown
+from armlab.diagnosis.summary import gap_section, row_floor, stage_entry, verdict_section
 from armlab.estimation.joint_ls import PARAM_NAMES
 from armlab.protocols.conditioning_window.diagnosis.data import CHANNELS, CondSet, prepare_cond
 from armlab.protocols.conditioning_window.diagnosis.models import COND_FAMILY, COND_SURROGATES
@@ -99,17 +98,14 @@ def _identify(cs: CondSet, target_rows: np.ndarray) -> list[dict]:
 
 
 def _stage(cs: CondSet, y: np.ndarray, model: FittedModel, measured_ident: list[dict], floor: float) -> dict:
-    gap, _, _ = held_out_gap(model, (cs,), [y])
+    entry, _ = stage_entry(model, (cs,), [y], floor)
     sim_ident = _identify(cs, model.predictions[0])
     bias = [
         {"t_obs_s": m["t_obs_s"], **{k: m[k] - s[k] for k in PARAM_NAMES}, "measured": m, "simulated": s}
         for m, s in zip(measured_ident, sim_ident, strict=True)
     ]
     return {
-        "effects": list(model.effects),
-        "held_out_gap": gap,
-        "held_out_vaf_percent": 100.0 * (1.0 - gap),
-        "noise_floor": floor,
+        **entry,
         **_breakdowns(cs, y, model.residuals[0]),
         "parameters": dict(zip(model.linear_names, map(float, model.beta[0]), strict=True)),
         "nonlinear_parameters": dict(model.theta),
@@ -132,7 +128,7 @@ def diagnose_cond(trials, cfg: DiagnosisConfig) -> tuple[dict, dict]:
     cs = prepare_cond(trials, band_hz=cfg.band_hz, holdout_fraction=cfg.holdout_fraction)
     y = cs.y
     names = cond_candidates(cfg)
-    floor = float(np.sum(cs.row_noise_var[cs.held])) / float(np.sum(y[cs.held] ** 2))
+    floor = row_floor(cs, y)
     sel = select_effects(
         (cs,),
         [y],
@@ -145,18 +141,11 @@ def diagnose_cond(trials, cfg: DiagnosisConfig) -> tuple[dict, dict]:
     )
     measured_ident = _identify(cs, y)
     stages = [_stage(cs, y, m, measured_ident, floor) for m in sel.stages]
-    strip = sel.ranking_steps()
+    metric = "held-out residual power / measured power, 0-400 ms after onset, both joints (1 - VAF)"
     results = {
-        "protocol": "conditioning_window",
-        "settings": asdict(cfg),
-        "verdict": sel.verdict,
-        "ranking": strip[0] if strip else [],
-        "ranking_steps": strip,
+        **verdict_section("conditioning_window", cfg, sel),
         "gap": {
-            "metric": "held-out residual power / measured power, 0-400 ms after onset, both joints (1 - VAF)",
-            "nominal": stages[0]["held_out_gap"],
-            "added": [{"effects": s["effects"], "held_out_gap": s["held_out_gap"]} for s in stages[1:]],
-            "noise_floor": floor,
+            **gap_section(metric, stages, floor),
             "noise_source": (
                 "band-limited torque over the pre-onset hold, as hand-force noise through each row's "
                 "J(q)^T, plus the baseline-mean variance"

@@ -23,6 +23,7 @@ from armlab.diagnosis.attribution import (
 )
 from armlab.diagnosis.families import FittedModel, fit_model
 from armlab.diagnosis.localise import band_breakdown, frf_parameters, residual_tests, window_breakdown
+from armlab.diagnosis.summary import gap_section, stage_entry
 from armlab.dsp import zero_phase
 from armlab.errors import ConfigError, DataError
 from armlab.protocols.joint_1dof.diagnosis.data import highpass_sos, noise_floor, prepare_trials
@@ -41,6 +42,8 @@ __all__ = [
     "prepare_scoring",
     "diagnose_joint",
 ]
+
+_METRIC = "held-out residual power / measured power in the scoring band (1 - VAF)"
 
 
 def candidate_names(cfg: DiagnosisConfig) -> list[str]:
@@ -62,13 +65,10 @@ def _impedance(model: FittedModel, sign: float) -> list[dict]:
 
 
 def _stage(model, trials, y_band, noise, floor, sign, frf_meas) -> dict:
-    gap, _, per_trial = held_out_gap(model, trials, y_band)
+    entry, per_trial = stage_entry(model, trials, y_band, floor)
     frf_sim = [frf_parameters(tr, p) for tr, p in zip(trials, model.predictions, strict=True)]
     return {
-        "effects": list(model.effects),
-        "held_out_gap": gap,
-        "held_out_vaf_percent": 100.0 * (1.0 - gap),
-        "noise_floor": floor,
+        **entry,
         "per_trial": [
             {"trial": tr.name, "held_out_gap": g, "held_out_vaf_percent": 100.0 * (1.0 - g)}
             for tr, g in zip(trials, per_trial, strict=True)
@@ -256,10 +256,7 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
         "ranking": ranking,
         "ranking_steps": steps,
         "gap": {
-            "metric": "held-out residual power / measured power in the scoring band (1 - VAF)",
-            "nominal": stages[0]["held_out_gap"],
-            "added": [{"effects": s["effects"], "held_out_gap": s["held_out_gap"]} for s in stages[1:]],
-            "noise_floor": floor,
+            **gap_section(_METRIC, stages, floor),
             "noise_source": noise.source,
         },
         "where": {

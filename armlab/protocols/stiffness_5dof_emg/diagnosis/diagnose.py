@@ -13,14 +13,13 @@ dict and the series for the figures out.
 
 from __future__ import annotations
 
-from dataclasses import asdict
-
 import numpy as np
 
 from armlab.config.diagnosis import DiagnosisConfig
-from armlab.diagnosis.attribution import held_out_gap, select_candidates, select_effects
+from armlab.diagnosis.attribution import select_candidates, select_effects
 from armlab.diagnosis.families import FittedModel
 from armlab.diagnosis.localise import masked_gap
+from armlab.diagnosis.summary import gap_section, row_floor, stage_entry, verdict_section
 from armlab.errors import EstimationError
 from armlab.estimation.static_stiffness import static_stiffness
 from armlab.protocols.stiffness_5dof_emg.diagnosis.data import CHANNELS, Stiff5Set, prepare_stiff5
@@ -81,14 +80,12 @@ def _breakdowns(cs: Stiff5Set, y: np.ndarray, resid: np.ndarray) -> dict:
 
 
 def _stage(cs: Stiff5Set, y: np.ndarray, model: FittedModel, floor: float) -> dict:
-    gap, _, _ = held_out_gap(model, (cs,), [y])
+    entry, _ = stage_entry(model, (cs,), [y], floor)
     return {
-        "effects": list(model.effects),
-        "held_out_gap": gap,
-        "held_out_vaf_percent": 100.0 * (1.0 - gap),
-        "noise_floor": floor,
+        **entry,
         **_breakdowns(cs, y, model.residuals[0]),
         "parameters": dict(zip(model.linear_names, map(float, model.beta[0]), strict=True)),
+        "nonlinear_parameters": dict(model.theta),
         "n_params": model.n_params,
     }
 
@@ -126,7 +123,7 @@ def diagnose_stiff5(trials, cfg: DiagnosisConfig) -> tuple[dict, dict]:
     names = stiff5_candidates(cfg)
     cs = prepare_stiff5(trials)
     y = cs.yw
-    floor = float(np.sum(cs.row_noise_var[cs.held])) / float(np.sum(y[cs.held] ** 2))
+    floor = row_floor(cs, y)
     sel = select_effects(
         (cs,),
         [y],
@@ -138,19 +135,14 @@ def diagnose_stiff5(trials, cfg: DiagnosisConfig) -> tuple[dict, dict]:
         family=stiff5_family(cs),
     )
     stages = [_stage(cs, y, m, floor) for m in sel.stages]
-    strip = sel.ranking_steps()
+    metric = (
+        "held-out residual power / measured power of the hold's 50 ms bins (torque, "
+        "displacement and base rows, each whitened by its noise; 1 - VAF)"
+    )
     results = {
-        "protocol": "stiffness_5dof_emg",
-        "settings": asdict(cfg),
-        "verdict": sel.verdict,
-        "ranking": strip[0] if strip else [],
-        "ranking_steps": strip,
+        **verdict_section("stiffness_5dof_emg", cfg, sel),
         "gap": {
-            "metric": "held-out residual power / measured power of the hold's 50 ms bins (torque, "
-            "displacement and base rows, each whitened by its noise; 1 - VAF)",
-            "nominal": stages[0]["held_out_gap"],
-            "added": [{"effects": s["effects"], "held_out_gap": s["held_out_gap"]} for s in stages[1:]],
-            "noise_floor": floor,
+            **gap_section(metric, stages, floor),
             "noise_source": "the pre-disturbance still segment: spread of its four 50 ms bins per trial "
             "and channel, pooled (the sensors and the IK as recorded)",
         },
