@@ -113,7 +113,6 @@ def test_check_8_through_the_run_path(run):
     for row, key in zip(rows, ("random_windows", "leave_one_condition_out"), strict=True):
         split = emg[key]
         assert row["value"] == pytest.approx(split["network_nrmse"] / split["linear_nrmse"], rel=1e-12)
-        assert row["passed"] == (row["value"] < 1.0)
         assert "0.866" in row["what"]
     # random windows: the network beats the linear map (the paper's ordering), every run (seeded)
     assert rows[0]["passed"], emg["random_windows"]
@@ -174,4 +173,6 @@ def test_sparse_filtering_layers_feed_both_maps(run):
     assert "sparse-filtering layers of [8, 8]" in emg["features"]
     for key in ("random_windows", "leave_one_condition_out"):
         for name in ("network_nrmse", "linear_nrmse"):
+            # a map that learned nothing predicts the mean (NRMSE ~1); 10 leaves room for an
+            # overfit on sparse features and still catches a diverged fit (NaN, or orders above)
             assert 0 < emg[key][name] < 10, (key, name, emg[key][name])

@@ -61,8 +61,7 @@ PAPER_LINEAR_NRMSE = 0.39  # paper Sec. 4.1: "a linear model never achieved 0.39
 # 0.866: the network's NRMSE over the linear's, at most (paper Sec. 4.1)
 PAPER_RATIO = PAPER_NETWORK_NRMSE / PAPER_LINEAR_NRMSE
 _JOINTS = ("sh_flex", "sh_abd", "sh_rot", "elbow", "pron")
-_TRIL = np.tril_indices(5)
-ENTRY_NAMES = tuple(f"K[{_JOINTS[i]},{_JOINTS[j]}]" for i, j in zip(*_TRIL, strict=True))
+ENTRY_NAMES = tuple(lower_entries(np.array([[f"K[{a},{b}]" for b in _JOINTS] for a in _JOINTS])))
 # leave-one-out's search: a kept-out, a validation and two training conditions
 MIN_EMG_CONDITIONS = 4
 
@@ -137,7 +136,8 @@ def _loco_split(F, Z, K_true_w, cond, n_c, entries, est: EstimationConfig, rng) 
     # trained on the rest; the mean validation NRMSE picks (the same splits for both models)
     h0 = int(rng.integers(n_c))
     others = np.array([c for c in range(n_c) if c != h0])
-    vals = rng.choice(others, size=min(est.emg_loco_validation, n_c - 3), replace=False)
+    # each split trains on every condition but h0 and its validation one: any of the others can validate
+    vals = rng.choice(others, size=min(est.emg_loco_validation, len(others)), replace=False)
     splits = [_condition_split(F, Z, (cond != h0) & (cond != v), cond == v, est, rng) for v in vals]
     net = search_network(splits, rng, est.emg_search_draws, n_hidden=est.emg_hidden, entries=entries)
     lin = search_linear(splits, entries)
@@ -184,6 +184,7 @@ def estimate_emg_map(
     cond = np.repeat(np.asarray(trials.trial_meta["condition"], int), n_win)
     Z, K_true_w = np.asarray(K_hat, float)[cond], np.asarray(K_true, float)[cond]
     spread = lower_entries(np.asarray(K_true, float)).std(axis=0)
+    # entries equal in every condition (spread only rounding) have no std to normalise by: left out
     entries = spread > 1e-9 * spread.max()
     rng = np.random.default_rng([int(trials.attrs.get("seed", 0)), 4])
     random = _random_split(F, Z, K_true_w, entries, est, rng)
@@ -220,5 +221,6 @@ def estimate_emg_map(
         "linear": [random["linear_nrmse"], loco["linear_nrmse"]],
         "paper_network": PAPER_NETWORK_NRMSE,
         "paper_linear": PAPER_LINEAR_NRMSE,
+        "hidden": est.emg_hidden,
     }
     return EmgMap(results=results, checks=checks, series=series)
