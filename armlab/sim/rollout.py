@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import threading
 from concurrent.futures import FIRST_EXCEPTION, ThreadPoolExecutor, wait
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import mujoco
 import numpy as np
@@ -52,8 +52,8 @@ class Kept:
     """What :func:`simulate` keeps of every sample (default: all of it).
 
     A caller that reads only part saves copying and holding the rest: the conditioning lab keeps
-    64 of the 97 values per sample (no muscle lengths and velocities, which only the reflex reads,
-    no commands, the arm's two joint angles of the 12 positions).
+    neither the muscle lengths and velocities (only the reflex reads them) nor the commands, and of
+    the positions only the arm's two joint angles.
 
     Attributes:
         sensors: names of the scene's sensors (:attr:`Scene.sensors`); None: every sensor.
@@ -404,10 +404,8 @@ def simulate(
                     )
                     failure = rollout_failure(state, states, dt, warning_counts(share_data))
                     if failure is not None:
-                        local = failure.trial
-                        failure = RolloutFailure(
-                            None if local is None else g.start + local, failure.step, failure.quantity
-                        )
+                        if failure.trial is not None:  # a row of the share -> a row of the batch
+                            failure = replace(failure, trial=g.start + failure.trial)
                         stop.fail(j, failure, np.arange(c0 + 1, c1 + 1) * dt)
                         return
                     if reflex.enabled:

@@ -42,7 +42,7 @@ Held out: in every (condition, direction) cell every third disturbance from the 
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
-from functools import cached_property
+from functools import cache, cached_property
 from pathlib import Path
 
 import mujoco
@@ -249,12 +249,19 @@ def _bins(x: np.ndarray, edges: np.ndarray) -> np.ndarray:
     return (c[:, edges[1:]] - c[:, edges[:-1]]) / np.diff(edges)[None, :, None]
 
 
+@cache
+def _nominal_lab():
+    """The nominal stiffness lab's compiled scene (read only here): composed once per process, not
+    once per pass of :func:`prepare_stiff5` (each pass, the probe's included, reads its servos)."""
+    from armlab.models.arm5_scene import build_arm5_scene
+
+    return build_arm5_scene()
+
+
 def _robot_compliance(robot_q: np.ndarray) -> np.ndarray:
     """(6, 6) Cartesian compliance of the LWR's position servos at the cuff centre, m/N and rad/(N·m):
     ``J_r diag(1/kp) J_rᵀ`` with the servos' gains of the composed lab (models/lwr, the nominal lab)."""
-    from armlab.models.arm5_scene import build_arm5_scene
-
-    scene = build_arm5_scene()
+    scene = _nominal_lab()
     m = scene.model
     d = mujoco.MjData(m)
     d.qpos[scene.robot_qpos] = robot_q
