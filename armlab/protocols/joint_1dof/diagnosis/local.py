@@ -55,7 +55,9 @@ def _folds(n: int, block: int) -> np.ndarray:
     return (np.arange(n) // max(block, 1)) % 2 == 0
 
 
-def crossfit_mean(z: np.ndarray, fs_hz: float, sigma_s: float, *, weight: np.ndarray | None = None) -> np.ndarray:
+def crossfit_mean(
+    z: np.ndarray, fs_hz: float, sigma_s: float, *, weight: np.ndarray | None = None
+) -> np.ndarray:
     """Gaussian-kernel local mean of ``z`` at every sample from the other fold's samples only.
 
     Args:
@@ -95,7 +97,9 @@ def local_gains(r: np.ndarray, x: np.ndarray, v: np.ndarray, fs_hz: float) -> tu
         (ΔK, ΔB): (n,) N·m/rad and N·m·s/rad, the local stiffness and damping change at every
         sample, each from the other fold's samples (module docstring).
     """
-    r, x, v = (z - gaussian_filter1d(z, _DETREND_S * fs_hz, mode="nearest") for z in map(np.asarray, (r, x, v)))
+    r, x, v = (
+        z - gaussian_filter1d(z, _DETREND_S * fs_hz, mode="nearest") for z in map(np.asarray, (r, x, v))
+    )
     prods = np.stack([x * x, x * v, v * v, r * x, r * v], axis=1)
     sxx, sxv, svv, srx, srv = crossfit_mean(prods, fs_hz, GAIN_SIGMA_S).T
     sxx = sxx + _RIDGE * float(np.mean(sxx))

@@ -107,16 +107,22 @@ def _effect_column(tr: PreparedTrial, name: str, values: tuple[float, ...]) -> n
 def _local_columns(tr: PreparedTrial) -> np.ndarray:
     """(n, 3) ``[ΔK(t)·θ, ΔB(t)·θ̇, slow level(t)]`` of the nominal's residual (:mod:`.local`).
 
-    The residual is that of ``I·θ̈ + B·θ̇ + K·θ + c`` fitted on the trial's training part; every
+    The residual is that of ``I·θ̈ + B·θ̇ + K·θ + c`` and the tonic level's terms ``m·θ``, ``m·θ̇``
+    fitted on the trial's training part (so the local gains are the change ``m(t)`` does not
+    reveal, and the candidate's slopes on ``m`` keep their meaning); every
     sample's local estimates come from the other fold's samples (training and held-out alike: the
     held-out sample itself never enters them), so the columns predict the held-out part from its
     neighbours, and their linear gains are fitted on the training part.
     """
-    basis = np.stack([tr.a, tr.v, tr.x, np.ones_like(tr.x)], axis=1)
+    basis = np.stack([tr.a, tr.v, tr.x, np.ones_like(tr.x), tr.m * tr.x, tr.m * tr.v], axis=1)
     beta, *_ = np.linalg.lstsq(basis[tr.train], tr.y[tr.train], rcond=None)
     r = tr.y - basis @ beta
     dk, db = local_gains(r, tr.x, tr.v, tr.fs_hz)
-    return np.stack([dk * tr.x, db * tr.v, local_level(r, tr.fs_hz)], axis=1)
+    local = np.stack([dk * tr.x, db * tr.v, local_level(r, tr.fs_hz)], axis=1)
+    # less their projection on that basis over the training part: the nominal's and m(t)'s
+    # parameters then keep the values they take without these columns
+    coef, *_ = np.linalg.lstsq(basis[tr.train], local[tr.train], rcond=None)
+    return local - basis @ coef
 
 
 def _columns(

@@ -57,7 +57,9 @@ def peer_vaf(
         DataError: a trial too short to leave both parts, or one with an operating angle.
     """
     if trial.op is not None:
-        raise DataError(f"trial {trial.name!r} has an operating angle; the peer's figures are for stationary trials")
+        raise DataError(
+            f"trial {trial.name!r} has an operating angle; the peer's figures are for stationary trials"
+        )
     effects = [e for e in model.effects if not (position_only and e in TORQUE_COVARIATE_EFFECTS)]
     surrogates = tuple(JOINT_SURROGATES[e] for e in effects)
     phi = JOINT_FAMILY.columns(trial, surrogates, model.theta)
