@@ -50,6 +50,7 @@ __all__ = [
     "RobotModelError",
     "TorsoTranslation",
     "TransmissionCompliance",
+    "VoluntaryTorque",
     "enabled_effects",
     "register_effect_configs",
 ]
@@ -265,6 +266,24 @@ class CocontractionVariation(Effect):
 
 
 @dataclass(kw_only=True)
+class VoluntaryTorque(Effect):
+    NAME: ClassVar[str] = "voluntary_torque"
+    PHYSICS: ClassVar[str] = (
+        "a slow torque the subject adds while holding the tonic contraction (tracking corrections, "
+        "drift of effort): band-limited below ~1-2 Hz, independent of the imposed position"
+    )
+    SOURCE: ClassVar[str] = (
+        "Hunter & Kearney 1982 (J. Biomech. 15:747): tonic-contraction tracking error ~10-20 % of "
+        "the target torque; issue 18: the real ankle trial z_df3 has most of its gap at 0-2 Hz"
+    )
+    CONFUSABLE: ClassVar[dict[str, str]] = {
+        "force_sensor_drift": "trials with the subject relaxed (a drift stays, a voluntary torque does not)"
+    }
+    rms_Nm: float = 0.5  # N·m, rms of the slow torque (10-20 % of a 2.5-5 N·m tonic target)
+    bandwidth_hz: float = 1.0  # Hz, of the fluctuation (below ~1-2 Hz, issue 18)
+
+
+@dataclass(kw_only=True)
 class OperatingPointImpedance(Effect):
     NAME: ClassVar[str] = "operating_point_impedance"
     PHYSICS: ClassVar[str] = (
@@ -420,6 +439,7 @@ EFFECTS: dict[str, type[Effect]] = {
         ChannelDelay,
         PayloadMass,
         CocontractionVariation,
+        VoluntaryTorque,
         OperatingPointImpedance,
         NonQuadraticField,
         RobotModelError,
@@ -449,6 +469,7 @@ class EffectsConfig:
     channel_delay: ChannelDelay | None = None
     payload_mass: PayloadMass | None = None
     cocontraction_variation: CocontractionVariation | None = None
+    voluntary_torque: VoluntaryTorque | None = None
     operating_point_impedance: OperatingPointImpedance | None = None
     non_quadratic_field: NonQuadraticField | None = None
     robot_model_error: RobotModelError | None = None

@@ -21,6 +21,7 @@ LABELS = {
     "force_sensor_bandwidth": "the torque sensor's bandwidth",
     "channel_delay": "a delay between the torque and position channels",
     "cocontraction_variation": "slow co-contraction variation",
+    "voluntary_torque": "a slow voluntary torque",
     "payload_mass": "an unmodelled payload mass",
 }
 #: Units of the linear (per-trial) parameters.
@@ -32,6 +33,9 @@ UNITS = {
     "joint_friction.coulomb": "N·m",
     "cocontraction_variation.stiffness_slope": "N·m/rad",
     "cocontraction_variation.damping_slope": "N·m·s/rad",
+    "cocontraction_variation.local_stiffness_gain": "1",
+    "cocontraction_variation.local_damping_gain": "1",
+    "voluntary_torque.gain": "1",
     "compliance.gain": "N·m/rad",
     "cuff_compliance.pedal_inertia": "kg·m²",
 }

@@ -29,6 +29,7 @@ PROTOCOL = Protocol(
         "channel_delay",
         "payload_mass",
         "cocontraction_variation",
+        "voluntary_torque",
         "operating_point_impedance",
     ),
     diagnosis=HOOKS,

@@ -6,7 +6,10 @@ Each catalogue effect changes that model in one of three ways, written here in t
 linear-in-parameters form as the MuJoCo model of :mod:`armlab.sim.joint_rig` (checked against
 it in the tests):
 
-- **additive** columns (``reflex``, ``joint_friction``, ``cocontraction_variation``);
+- **additive** columns (``reflex``, ``joint_friction``, ``cocontraction_variation``,
+  ``voluntary_torque``; the last two also from leave-block-out local estimates of the nominal's
+  residual, :mod:`.local`: a stiffness that drifts without the tonic torque showing it, a slow
+  voluntary torque);
 - **intrinsic** replacement of ``[θ̈, θ̇, θ]`` by a series-compliance response
   (``cuff_compliance``: the pedal's own inertia stays rigid on the sensor side;
   ``transmission_compliance``: everything beyond the spring);
@@ -29,6 +32,7 @@ from scipy import signal
 from armlab.diagnosis.families import ModelFamily, NLParam, Surrogate, lowpass2, sensor_lowpass, shift_columns
 from armlab.dsp import bilinear
 from armlab.protocols.joint_1dof.diagnosis.data import PreparedTrial
+from armlab.protocols.joint_1dof.diagnosis.local import local_gains, local_level
 
 __all__ = [
     "JOINT_FAMILY",
@@ -92,10 +96,33 @@ def _effect_column(tr: PreparedTrial, name: str, values: tuple[float, ...]) -> n
         out = s * lowpass2(stretch, cutoff, 0.7, tr.fs_hz)
     elif name == "joint_friction":
         out = tr.to_fit_rate(_friction(tr.v_raw, *values, tr.raw_fs_hz))
+    elif name == "local":
+        out = _local_columns(tr)
     else:  # a compliance: (tau2, tau1, ratio)
         out = _compliance(tr, *values)
     out.flags.writeable = False
     return out
+
+
+def _local_columns(tr: PreparedTrial) -> np.ndarray:
+    """(n, 3) ``[ΔK(t)·θ, ΔB(t)·θ̇, slow level(t)]`` of the nominal's residual (:mod:`.local`).
+
+    The residual is that of ``I·θ̈ + B·θ̇ + K·θ + c`` and the tonic level's terms ``m·θ``, ``m·θ̇``
+    fitted on the trial's training part (so the local gains are the change ``m(t)`` does not
+    reveal, and the candidate's slopes on ``m`` keep their meaning); every
+    sample's local estimates come from the other fold's samples (training and held-out alike: the
+    held-out sample itself never enters them), so the columns predict the held-out part from its
+    neighbours, and their linear gains are fitted on the training part.
+    """
+    basis = np.stack([tr.a, tr.v, tr.x, np.ones_like(tr.x), tr.m * tr.x, tr.m * tr.v], axis=1)
+    beta, *_ = np.linalg.lstsq(basis[tr.train], tr.y[tr.train], rcond=None)
+    r = tr.y - basis @ beta
+    dk, db = local_gains(r, tr.x, tr.v, tr.fs_hz)
+    local = np.stack([dk * tr.x, db * tr.v, local_level(r, tr.fs_hz)], axis=1)
+    # less their projection on that basis over the training part: the nominal's and m(t)'s
+    # parameters then keep the values they take without these columns
+    coef, *_ = np.linalg.lstsq(basis[tr.train], local[tr.train], rcond=None)
+    return local - basis @ coef
 
 
 def _columns(
@@ -119,7 +146,10 @@ def _columns(
         values = (theta["joint_friction.velocity_rad_s"], theta["joint_friction.release_s"])
         cols.append(_effect_column(tr, "joint_friction", values))
     if "cocontraction_variation" in names:
-        cols += [tr.m * tr.x, tr.m * tr.v]
+        local = _effect_column(tr, "local", ())
+        cols += [tr.m * tr.x, tr.m * tr.v, local[:, 0], local[:, 1]]
+    if "voluntary_torque" in names:
+        cols.append(_effect_column(tr, "local", ())[:, 2])
     if op:  # K and B as quadratics of the operating angle, before the output transforms
         p = tr.op
         cols += [p * tr.x, p * tr.v, p * p * tr.x, p * p * tr.v]
@@ -178,7 +208,16 @@ JOINT_SURROGATES: dict[str, Surrogate] = {
             "output",
             (NLParam("delay_s", -0.03, 0.06, tuple(np.round(np.arange(-0.02, 0.0405, 0.002), 3))),),
         ),
-        Surrogate("cocontraction_variation", "additive", (), ("stiffness_slope", "damping_slope")),
+        # the tonic torque's covariate m(t), and the local stiffness/damping change that m(t) does
+        # not reveal (co-contraction: agonist and antagonist rise together, the net torque stays)
+        Surrogate(
+            "cocontraction_variation",
+            "additive",
+            (),
+            ("stiffness_slope", "damping_slope", "local_stiffness_gain", "local_damping_gain"),
+        ),
+        # a slow torque the position does not predict, from its neighbours' level (:mod:`.local`)
+        Surrogate("voluntary_torque", "additive", (), ("gain",)),
         Surrogate("payload_mass", "absorbed"),
     )
 }
