@@ -50,6 +50,7 @@ __all__ = [
     "RobotModelError",
     "TorsoTranslation",
     "TransmissionCompliance",
+    "VoluntaryTorque",
     "enabled_effects",
     "register_effect_configs",
 ]
@@ -265,6 +266,29 @@ class CocontractionVariation(Effect):
 
 
 @dataclass(kw_only=True)
+class VoluntaryTorque(Effect):
+    NAME: ClassVar[str] = "voluntary_torque"
+    PHYSICS: ClassVar[str] = (
+        "a slow torque the subject adds voluntarily or posturally (holding a tonic level, tracking a "
+        "target), band-limited below ~1-2 Hz and independent of the perturbation: the position does "
+        "not predict it, and it reaches the recorded torque in full"
+    )
+    SOURCE: ClassVar[str] = (
+        "issue 18: the REKLAB trial z_df3 has most of its nominal gap at 0-2 Hz; voluntary torque "
+        "control of the ankle is limited to a few Hz (Kearney & Hunter 1990, Crit. Rev. Biomed. Eng. "
+        "18:55, which is why the perturbation band starts above it); its rms is this catalogue's "
+        "assumption (tonic-contraction tracking error ~10-20 % of a few N·m target)"
+    )
+    CONFUSABLE: ClassVar[dict[str, str]] = {
+        "cocontraction_variation": "trials at a constant, monitored tonic torque (the co-contraction "
+        "changes the stiffness with the torque, a voluntary torque changes only the torque)",
+        "force_sensor_drift": "a trial with the subject at rest or the pedal empty (a drift stays)",
+    }
+    rms_Nm: float = 0.5  # N·m, rms of the slow torque (assumption, see SOURCE)
+    bandwidth_hz: float = 1.0  # Hz, top of its band (issue 18: below ~1-2 Hz)
+
+
+@dataclass(kw_only=True)
 class OperatingPointImpedance(Effect):
     NAME: ClassVar[str] = "operating_point_impedance"
     PHYSICS: ClassVar[str] = (
@@ -420,6 +444,7 @@ EFFECTS: dict[str, type[Effect]] = {
         ChannelDelay,
         PayloadMass,
         CocontractionVariation,
+        VoluntaryTorque,
         OperatingPointImpedance,
         NonQuadraticField,
         RobotModelError,
@@ -449,6 +474,7 @@ class EffectsConfig:
     channel_delay: ChannelDelay | None = None
     payload_mass: PayloadMass | None = None
     cocontraction_variation: CocontractionVariation | None = None
+    voluntary_torque: VoluntaryTorque | None = None
     operating_point_impedance: OperatingPointImpedance | None = None
     non_quadratic_field: NonQuadraticField | None = None
     robot_model_error: RobotModelError | None = None

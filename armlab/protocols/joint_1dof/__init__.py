@@ -29,12 +29,14 @@ PROTOCOL = Protocol(
         "channel_delay",
         "payload_mass",
         "cocontraction_variation",
+        "voluntary_torque",
         "operating_point_impedance",
     ),
     diagnosis=HOOKS,
     examples=(
         "diagnose data=../shared/data/reklab_ankle protocol=joint_1dof diagnosis.per_trial=true",
         "diagnose-benchmark referee.protocol=joint_1dof referee.replicates=10",
+        "diagnose-benchmark referee.protocol=joint_1dof referee.generator=ode referee.replicates=10",
         "fit-joint ../shared/data/reklab_ankle",
     ),
     commands=(
