@@ -78,6 +78,7 @@ from armlab.sim.joint_ode_effects import (
     StiffnessModulation,
     TorqueDrift,
     VoluntaryTorque,
+    drift_signal,
     slow_signal,
 )
 from armlab.sim.joint_rig import JointRecording, JointSubject, simulate_joint_rig
@@ -117,6 +118,7 @@ __all__ = [
     "TorqueDrift",
     "VoluntaryTorque",
     "simulate_joint_ode",
+    "drift_signal",
     "slow_signal",
     "LabRecording",
     "SimResult",

@@ -42,7 +42,7 @@ import numpy as np
 from scipy import integrate, interpolate
 
 from armlab.errors import ConfigError, DataError
-from armlab.sim.joint_ode_effects import OdeEffects, slow_signal
+from armlab.sim.joint_ode_effects import OdeEffects, drift_signal, slow_signal
 
 __all__ = [
     "OdeJoint",
@@ -319,11 +319,7 @@ def simulate_joint_ode(
     acc_pos = plant.forces(t, x_pos)[0][..., plant.dm]
     drift = np.zeros((rows, n))
     if effects.drift is not None:
-        d = effects.drift
-        sign = rng.choice([-1.0, 1.0], (rows, 1))
-        wander = slow_signal(rng, rows, 0.002, 0.02)(t)
-        drift = sign * (d.rate_Nm_per_s * t + d.thermal_Nm * (1 - np.exp(-t / d.thermal_tau_s)))
-        drift += d.wander_Nm * wander
+        drift = drift_signal(t, effects.drift, rows, rng)
     motor = x_pos[..., plant.dm]
     position = motor
     if effects.quant_step_rad > 0:

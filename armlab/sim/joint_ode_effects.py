@@ -42,6 +42,7 @@ __all__ = [
     "StiffnessModulation",
     "TorqueDrift",
     "VoluntaryTorque",
+    "drift_signal",
     "slow_signal",
 ]
 
@@ -167,3 +168,15 @@ def slow_signal(rng: np.random.Generator, rows: int, lo_hz: float, hi_hz: float,
     c = rng.standard_normal((rows, m)) / np.sqrt(m)
     s = rng.standard_normal((rows, m)) / np.sqrt(m)
     return SlowSignal(freq_hz=f, cos=c, sin=s)
+
+
+def drift_signal(t_s: np.ndarray, drift: TorqueDrift, rows: int, rng: np.random.Generator) -> np.ndarray:
+    """The drift of :class:`TorqueDrift` at times ``t_s`` (n,) s: (rows, n) N·m.
+
+    ``sign·(rate·t + thermal·(1 − exp(−t/τ)))`` + wander·n(t), n a :class:`SlowSignal` in
+    0.002-0.02 Hz; draw order: the signs (one per row), then the wander.
+    """
+    sign = rng.choice([-1.0, 1.0], (rows, 1))
+    wander = slow_signal(rng, rows, 0.002, 0.02)(t_s)
+    ramp = drift.rate_Nm_per_s * t_s + drift.thermal_Nm * (1.0 - np.exp(-t_s / drift.thermal_tau_s))
+    return sign * ramp + drift.wander_Nm * wander
