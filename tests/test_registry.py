@@ -157,8 +157,9 @@ def test_referee_settings_of_another_protocol_are_refused(capsys, tmp_path):
 
     declared = set(REFEREE_SHARED_FIELDS)
     for p in registry.protocols():
-        if p.diagnosis is not None and p.diagnosis.referee is not None:
-            declared |= set(p.diagnosis.referee.settings)
+        if p.diagnosis is not None:
+            for referee in (p.diagnosis.referee, *p.diagnosis.referees.values()):
+                declared |= set(referee.settings) if referee is not None else set()
     assert declared == {f.name for f in fields(RefereeConfig)}  # every field is someone's
 
 

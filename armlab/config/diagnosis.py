@@ -81,7 +81,7 @@ class DiagnosisConfig:
 
 #: the RefereeConfig fields every referee reads; the others belong to one referee each
 #: (``Referee.settings`` of its protocol)
-REFEREE_SHARED_FIELDS = ("protocol", "replicates", "seed", "classes", "jobs")
+REFEREE_SHARED_FIELDS = ("protocol", "generator", "replicates", "seed", "classes", "jobs")
 
 
 @dataclass(kw_only=True)
@@ -89,6 +89,9 @@ class RefereeConfig:
     """The blind benchmark: pseudo-real datasets from the higher-fidelity simulation."""
 
     protocol: str | None = None  # None: the registry's default referee (armlab.protocols.registry)
+    # which of the protocol's referees: "default" (its first), or another one it registers
+    # (joint_1dof: "ode", the independent ODE generator); an unknown name is refused naming them
+    generator: str = "default"
     replicates: int = 10  # per class
     seed: int = 1000  # evaluation seeds start here; tuning used seeds 0..999
     n_trials: int = 4  # trials per dataset (two perturbation sequences, each recorded twice)
@@ -103,6 +106,8 @@ class RefereeConfig:
     cond_trials: int = 30
     cond_windows: list[int] = field(default_factory=lambda: [26])
     force_noise_N: float = 0.3
+    # s, range of the ODE referee's trial lengths (drawn uniformly; issue 18: 20-60 s)
+    ode_trial_s: list[float] = field(default_factory=lambda: [20.0, 60.0])
     classes: list[str] | None = None  # None: every class of the protocol
     jobs: int = 2  # datasets diagnosed in parallel (joblib)
 
@@ -119,6 +124,10 @@ class RefereeConfig:
         check(self.jobs != 0, "referee.jobs must be a positive number of workers or -1 (all cores), got 0")
         check(self.noise_std_Nm > 0, "referee.noise_std_Nm must be > 0")
         check(self.force_noise_N > 0, "referee.force_noise_N must be > 0")
+        check(
+            len(self.ode_trial_s) == 2 and 0 < self.ode_trial_s[0] <= self.ode_trial_s[1],
+            f"referee.ode_trial_s must be [low, high] s with 0 < low <= high, got {self.ode_trial_s}",
+        )
         check(self.cond_trials >= 6, "referee.cond_trials must be >= 6 (one per perturbation direction)")
         check(
             bool(self.cond_windows) and all(1 <= k <= 26 for k in self.cond_windows),

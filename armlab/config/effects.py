@@ -269,18 +269,23 @@ class CocontractionVariation(Effect):
 class VoluntaryTorque(Effect):
     NAME: ClassVar[str] = "voluntary_torque"
     PHYSICS: ClassVar[str] = (
-        "a slow torque the subject adds while holding the tonic contraction (tracking corrections, "
-        "drift of effort): band-limited below ~1-2 Hz, independent of the imposed position"
+        "a slow torque the subject adds voluntarily or posturally (holding a tonic level, tracking a "
+        "target), band-limited below ~1-2 Hz and independent of the perturbation: the position does "
+        "not predict it, and it reaches the recorded torque in full"
     )
     SOURCE: ClassVar[str] = (
-        "Hunter & Kearney 1982 (J. Biomech. 15:747): tonic-contraction tracking error ~10-20 % of "
-        "the target torque; issue 18: the real ankle trial z_df3 has most of its gap at 0-2 Hz"
+        "issue 18: the REKLAB trial z_df3 has most of its nominal gap at 0-2 Hz; voluntary torque "
+        "control of the ankle is limited to a few Hz (Kearney & Hunter 1990, Crit. Rev. Biomed. Eng. "
+        "18:55, which is why the perturbation band starts above it); its rms is this catalogue's "
+        "assumption (tonic-contraction tracking error ~10-20 % of a few N·m target)"
     )
     CONFUSABLE: ClassVar[dict[str, str]] = {
-        "force_sensor_drift": "trials with the subject relaxed (a drift stays, a voluntary torque does not)"
+        "cocontraction_variation": "trials at a constant, monitored tonic torque (the co-contraction "
+        "changes the stiffness with the torque, a voluntary torque changes only the torque)",
+        "force_sensor_drift": "a trial with the subject at rest or the pedal empty (a drift stays)",
     }
-    rms_Nm: float = 0.5  # N·m, rms of the slow torque (10-20 % of a 2.5-5 N·m tonic target)
-    bandwidth_hz: float = 1.0  # Hz, of the fluctuation (below ~1-2 Hz, issue 18)
+    rms_Nm: float = 0.5  # N·m, rms of the slow torque (assumption, see SOURCE)
+    bandwidth_hz: float = 1.0  # Hz, top of its band (issue 18: below ~1-2 Hz)
 
 
 @dataclass(kw_only=True)

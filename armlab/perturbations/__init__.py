@@ -8,6 +8,11 @@ from armlab.perturbations.cartesian_timeline import (
     stop_path_times,
     stop_timeline,
 )
+from armlab.perturbations.joint_families import (
+    PERTURBATION_FAMILIES,
+    JointPerturbation,
+    perturbation_signal,
+)
 from armlab.perturbations.multisine import ForceScenario, load_force_scenario, multisine
 from armlab.perturbations.prbs import prbs_position
 from armlab.perturbations.quintic import (
@@ -47,6 +52,9 @@ __all__ = [
     "load_force_scenario",
     "ForceScenario",
     "prbs_position",
+    "PERTURBATION_FAMILIES",
+    "JointPerturbation",
+    "perturbation_signal",
     "PAPER_DIRECTIONS",
     "QuinticPerturbation",
     "conditioning_ratio",

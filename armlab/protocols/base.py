@@ -21,6 +21,7 @@ from typing import Any
 
 from armlab.config.diagnosis import DiagnosisConfig, RefereeConfig
 from armlab.data.trial import TrialSet
+from armlab.errors import ConfigError
 
 __all__ = [
     "Command",
@@ -105,7 +106,9 @@ class DiagnosisHooks:
         report: ``(results, data_path=, figures=) -> str``: the Markdown report.
         figures: ``(viz, series, results, out_dir) -> [paths]``: the diagnosis figures.
         recording: ``(viz, series, path) -> path``: the rerun recording of the diagnosis.
-        referee: its blind referee, if it has one.
+        referee: its blind referee, if it has one (``referee.generator=default``).
+        referees: further referees by generator name (``referee.generator=<name>``), e.g. one
+            written by an independent generator to test rules tuned on the first.
         takes_units: its ``load`` reads ``units=`` (joint recordings in CSV or .mat); False for
             files that carry their units (trial files).
     """
@@ -118,7 +121,18 @@ class DiagnosisHooks:
     figures: Callable[[Any, dict, dict, Path], list[Path]]
     recording: Callable[[Any, dict, Path], Any]
     referee: Referee | None = None
+    referees: Mapping[str, Referee] = field(default_factory=dict)
     takes_units: bool = False
+
+    def referee_for(self, generator: str) -> Referee:
+        """The referee of ``referee.generator``: ``"default"`` (:attr:`referee`) or a name of
+        :attr:`referees`; :class:`~armlab.errors.ConfigError` naming the valid ones otherwise."""
+        if generator == "default" and self.referee is not None:
+            return self.referee
+        if generator in self.referees:
+            return self.referees[generator]
+        valid = ["default"] * (self.referee is not None) + list(self.referees)
+        raise ConfigError(f"referee.generator={generator!r} is no referee of this protocol; valid: {valid}")
 
 
 @dataclass(frozen=True, kw_only=True, eq=False)

@@ -103,7 +103,7 @@ def _one_case(cls: str, rep: int, ref: RefereeConfig, diag_cfg: DiagnosisConfig,
 def _case(cls: str, rep: int, ref: RefereeConfig, diag_cfg: DiagnosisConfig, root: Path) -> dict:
     from armlab.diagnosis.scoring import expected_verdict, score_case
 
-    referee = registry.get(ref.protocol, need="referee").diagnosis.referee
+    referee = registry.get(ref.protocol, need="referee").diagnosis.referee_for(ref.generator)
     folder = root / "datasets" / f"{cls.replace(':', '-').replace('+', '-')}_{rep:02d}"
     ds = referee.make_dataset(cls, rep, ref, diag_cfg, folder / "trials")
     write_json(folder / "truth.json", ds.truth)
@@ -135,7 +135,7 @@ def run_benchmark(overrides: list[str] | None, out_dir: Path) -> tuple[Path, dic
     if ref.protocol is None:
         ref = replace(ref, protocol=registry.DEFAULT_REFEREE)
     diag_cfg = apply_overrides(DiagnosisConfig(), "diagnosis", diag_items)
-    referee = registry.get(ref.protocol, need="referee").diagnosis.referee
+    referee = registry.get(ref.protocol, need="referee").diagnosis.referee_for(ref.generator)
     shared = REFEREE_SHARED_FIELDS
     foreign = [
         o for o in ref_items if o.partition("=")[0].split(".", 1)[1] not in (*shared, *referee.settings)

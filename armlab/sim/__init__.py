@@ -62,6 +62,25 @@ from armlab.sim.hold import (
     preload_activations,
     settle,
 )
+from armlab.sim.joint_ode import (
+    OdeJoint,
+    OdeRecording,
+    OdeServo,
+    simulate_joint_ode,
+)
+from armlab.sim.joint_ode_effects import (
+    LuGre,
+    OdeEffects,
+    OdeReflex,
+    SensorDynamics,
+    SeriesSpring,
+    SlowSignal,
+    StiffnessModulation,
+    TorqueDrift,
+    VoluntaryTorque,
+    drift_signal,
+    slow_signal,
+)
 from armlab.sim.joint_rig import JointRecording, JointSubject, simulate_joint_rig
 from armlab.sim.lab import (
     LabRecording,
@@ -86,6 +105,21 @@ __all__ = [
     "JointRecording",
     "JointSubject",
     "simulate_joint_rig",
+    "LuGre",
+    "OdeEffects",
+    "OdeJoint",
+    "OdeRecording",
+    "OdeReflex",
+    "OdeServo",
+    "SensorDynamics",
+    "SeriesSpring",
+    "SlowSignal",
+    "StiffnessModulation",
+    "TorqueDrift",
+    "VoluntaryTorque",
+    "simulate_joint_ode",
+    "drift_signal",
+    "slow_signal",
     "LabRecording",
     "SimResult",
     "preload_activations",

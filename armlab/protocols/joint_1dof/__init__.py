@@ -36,6 +36,7 @@ PROTOCOL = Protocol(
     examples=(
         "diagnose data=../shared/data/reklab_ankle protocol=joint_1dof diagnosis.per_trial=true",
         "diagnose-benchmark referee.protocol=joint_1dof referee.replicates=10",
+        "diagnose-benchmark referee.protocol=joint_1dof referee.generator=ode referee.replicates=10",
         "fit-joint ../shared/data/reklab_ankle",
     ),
     commands=(
