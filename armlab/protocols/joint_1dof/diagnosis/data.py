@@ -48,6 +48,7 @@ __all__ = [
     "NoiseFloor",
     "PreparedTrial",
     "derivatives",
+    "fit_decimation",
     "highpass_sos",
     "noise_floor",
     "prepare_trials",
@@ -151,6 +152,16 @@ def _tonic_torque(position: np.ndarray, torque: np.ndarray, slow_hz: float, fs: 
     return slow_t - basis @ coef
 
 
+def fit_decimation(fs_hz: float, fs_fit_hz: float) -> int:
+    """The integer decimation of a recorded rate that fits at ``fs_fit_hz`` or just above it.
+
+    The largest q with ``fs_hz / q >= fs_hz_fit`` (1 for data recorded below it): rounding to the
+    nearest q instead fitted 660 Hz data at 220 Hz, whose Nyquist frequency (110 Hz) cannot carry
+    the sensor-bandwidth candidate's cut-offs, and the whole diagnosis was refused.
+    """
+    return max(1, int(np.floor(fs_hz / fs_fit_hz + 1e-9)))
+
+
 def prepare_trials(
     records,
     *,
@@ -166,7 +177,7 @@ def prepare_trials(
     Args:
         records: sequence of objects with ``name``, ``position`` (n,) rad, ``torque`` (n,) N·m and
             ``fs_hz`` (e.g. :class:`armlab.data.joint_import.JointRecord`).
-        fs_fit_hz: Hz, rate the models are fitted at (rounded to an integer decimation).
+        fs_fit_hz: Hz, rate the models are fitted at, at least (:func:`fit_decimation`).
         band_hz: Hz, upper edge of the analysed band; below 0.45 of the fitting rate.
         holdout_fraction: the last fraction of every trial held out for scoring.
         slow_hz: Hz, cut-off of the slow (tonic) torque.
@@ -186,7 +197,7 @@ def prepare_trials(
     fs = next(iter(rates.values()))
     if any(abs(f - fs) > 1e-6 * fs for f in rates.values()):
         raise DataError(f"trials have different sample rates {rates}; resample them to one rate first")
-    q = max(1, int(round(fs / fs_fit_hz)))
+    q = fit_decimation(fs, fs_fit_hz)
     fs_fit = fs / q
     if band_hz >= 0.45 * fs_fit:
         raise DataError(

@@ -26,7 +26,12 @@ from armlab.diagnosis.localise import band_breakdown, frf_parameters, residual_t
 from armlab.diagnosis.summary import gap_section, stage_entry
 from armlab.dsp import zero_phase
 from armlab.errors import ConfigError, DataError
-from armlab.protocols.joint_1dof.diagnosis.data import highpass_sos, noise_floor, prepare_trials
+from armlab.protocols.joint_1dof.diagnosis.data import (
+    fit_decimation,
+    highpass_sos,
+    noise_floor,
+    prepare_trials,
+)
 from armlab.protocols.joint_1dof.diagnosis.derivative_floor import derivative_floor
 from armlab.protocols.joint_1dof.diagnosis.models import (
     JOINT_FAMILY,
@@ -110,7 +115,7 @@ def check_referee(ref, cfg: DiagnosisConfig) -> None:
     (the checks :func:`prepare_trials` and the candidates' rates apply to the data), before the
     referee simulates any."""
     fs = float(ref.fs_hz)
-    fs_fit = fs / max(1, int(round(fs / cfg.fs_fit_hz)))
+    fs_fit = fs / fit_decimation(fs, cfg.fs_fit_hz)
     try:
         if cfg.band_hz >= 0.45 * fs_fit:
             raise DataError(
