@@ -23,7 +23,11 @@ from conftest import (
 
 from armlab.config.diagnosis import DiagnosisConfig
 from armlab.protocols.joint_1dof.diagnosis.diagnose import diagnose_joint
-from armlab.protocols.joint_1dof.diagnosis.position_sensor import grid_step, position_floor, white_level
+from armlab.protocols.joint_1dof.diagnosis.position_sensor import (
+    grid_step,
+    position_floor,
+    white_level,
+)
 
 # a reduced candidate list keeps these CI tests cheap; reflex and friction stay as the rivals
 _CANDIDATES = ["reflex", "joint_friction", "encoder_quantisation", "position_sensor_noise"]
@@ -101,9 +105,8 @@ def test_position_floor_is_the_error_the_nominal_carries():
     xq = _grid(x, _STEP, rng)
     (tq, tt), _, _ = prepared([JointTrial("q", xq, 0 * x), JointTrial("t", x, 0 * x)])
     err = JOINT_I * (tq.a - tt.a) + JOINT_B * (tq.v - tt.v) + JOINT_K * (tq.x - tt.x)
-    ratio = float(np.var(err[tq.train | tq.held])) / position_floor(
-        tq, np.array([JOINT_I, JOINT_B, JOINT_K]), band_hz=40.0
-    )
+    beta = np.array([JOINT_I, JOINT_B, JOINT_K])
+    ratio = float(np.var(err[tq.train | tq.held])) / position_floor(tq, beta, band_hz=40.0)
     assert 1.0 < ratio < 4.0
 
 
@@ -114,9 +117,13 @@ def test_position_floor_is_the_error_the_nominal_carries():
 def test_position_errors_are_named_and_shrink_the_gap(kind, expected):
     results, _ = diagnose_joint(_records(kind, seed=4), DiagnosisConfig(candidates=_CANDIDATES))
     assert results["verdict"] == [expected]
+    gap = results["gap"]
+    pos = gap["position_sensor"]
+    assert pos["candidate"] == ("encoder_quantisation" if kind == "grid" else "position_sensor_noise")
+    if kind == "grid":
+        assert pos["grid_step_rad"] == pytest.approx(_STEP, rel=1e-6)  # the file's round-off only
     if expected == "none":
         return
-    gap = results["gap"]
     excess = gap["nominal"] - gap["noise_floor"]
     shrink = (gap["nominal"] - gap["added"][-1]["held_out_gap"]) / excess
     # above the slow PRBS's 4 Hz corner the recorded angle is mostly the sensor's error, which the
