@@ -223,8 +223,8 @@ class EncoderQuantisation(Effect):
     SOURCE: ClassVar[str] = "16-bit absolute encoder: 2π/65536 rad ≈ 9.6e-5 rad; capstan rig 2 µm"
     CONFUSABLE: ClassVar[dict[str, str]] = {
         "position_sensor_noise": "none needed: the recorded angle's changes are whole steps of one grid",
-        "force_sensor_noise": "a perturbation of lower bandwidth (the position error's share of the gap "
-        "grows with the acceleration's band, the torque noise's does not)",
+        "force_sensor_noise": "a recording at rest (the grid's error is constant while the angle holds "
+        "still, the torque sensor's noise is not)",
     }
     step: float = 9.6e-5  # rad (joint) or m (Cartesian)
 
@@ -244,10 +244,9 @@ class PositionSensorNoise(Effect):
     )
     CONFUSABLE: ClassVar[dict[str, str]] = {
         "encoder_quantisation": "none needed: the recorded angle's changes are whole steps of one grid",
-        "force_sensor_noise": "a perturbation of lower bandwidth (the position error's share of the gap "
-        "grows with the acceleration's band, the torque noise's does not)",
+        "force_sensor_noise": "a recording at rest (the angle's spread there is its sensor's noise alone)",
     }
-    std_rad: float = 2e-4  # rad
+    std_rad: float = 2e-4  # rad, rms (the SOURCE's assumption)
 
 
 @dataclass(kw_only=True)
