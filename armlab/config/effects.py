@@ -46,6 +46,7 @@ __all__ = [
     "NonQuadraticField",
     "PayloadMass",
     "PlaneTilt",
+    "PositionSensorNoise",
     "Reflex",
     "RobotModelError",
     "TorsoTranslation",
@@ -220,7 +221,32 @@ class EncoderQuantisation(Effect):
     LEVEL: ClassVar[EffectLevel] = "sensor"
     PHYSICS: ClassVar[str] = "position rounded to the encoder's resolution before differentiation"
     SOURCE: ClassVar[str] = "16-bit absolute encoder: 2π/65536 rad ≈ 9.6e-5 rad; capstan rig 2 µm"
+    CONFUSABLE: ClassVar[dict[str, str]] = {
+        "position_sensor_noise": "none needed: the recorded angle's changes are whole steps of one grid",
+        "force_sensor_noise": "a recording at rest (the grid's error is constant while the angle holds "
+        "still, the torque sensor's noise is not)",
+    }
     step: float = 9.6e-5  # rad (joint) or m (Cartesian)
+
+
+@dataclass(kw_only=True)
+class PositionSensorNoise(Effect):
+    NAME: ClassVar[str] = "position_sensor_noise"
+    LEVEL: ClassVar[EffectLevel] = "sensor"
+    PHYSICS: ClassVar[str] = (
+        "white noise on the recorded angle (analogue potentiometer/resolver electronics, an "
+        "interpolated encoder) before differentiation: the nominal's regressors carry it "
+        "(errors in variables)"
+    )
+    SOURCE: ClassVar[str] = (
+        "assumption, no measured source: the order of a 12-bit conversion of a ±π rad potentiometer "
+        "(2π/4096 rad steps, step/√12 = 4.4e-4 rad rms)"
+    )
+    CONFUSABLE: ClassVar[dict[str, str]] = {
+        "encoder_quantisation": "none needed: the recorded angle's changes are whole steps of one grid",
+        "force_sensor_noise": "a recording at rest (the angle's spread there is its sensor's noise alone)",
+    }
+    std_rad: float = 2e-4  # rad, rms (the SOURCE's assumption)
 
 
 @dataclass(kw_only=True)
@@ -441,6 +467,7 @@ EFFECTS: dict[str, type[Effect]] = {
         AccelNoise,
         AccelMisalignment,
         EncoderQuantisation,
+        PositionSensorNoise,
         ChannelDelay,
         PayloadMass,
         CocontractionVariation,
@@ -471,6 +498,7 @@ class EffectsConfig:
     accel_noise: AccelNoise | None = None
     accel_misalignment: AccelMisalignment | None = None
     encoder_quantisation: EncoderQuantisation | None = None
+    position_sensor_noise: PositionSensorNoise | None = None
     channel_delay: ChannelDelay | None = None
     payload_mass: PayloadMass | None = None
     cocontraction_variation: CocontractionVariation | None = None

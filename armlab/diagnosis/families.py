@@ -51,7 +51,7 @@ class Surrogate:
     """One effect's change to the joint model (see the module docstring)."""
 
     name: str
-    kind: str  # "additive" | "intrinsic" | "output" | "absorbed"
+    kind: str  # "additive" | "intrinsic" | "output" | "position" | "absorbed"
     params: tuple[NLParam, ...] = ()
     linear: tuple[str, ...] = ()  # names of the linear parameters it adds (per trial)
     absorbed_by: str = "limb inertia"  # kind "absorbed": the nominal parameter that takes it up

@@ -26,6 +26,7 @@ PROTOCOL = Protocol(
         "force_sensor_drift",
         "force_sensor_bandwidth",
         "encoder_quantisation",
+        "position_sensor_noise",
         "channel_delay",
         "payload_mass",
         "cocontraction_variation",

@@ -39,6 +39,7 @@ from armlab.protocols.joint_1dof.diagnosis.models import (
     JOINT_TV_FAMILY,
     OP_LINEAR_NAMES,
 )
+from armlab.protocols.joint_1dof.diagnosis.position_sensor import position_sensor_summary
 from armlab.protocols.joint_1dof.diagnosis.rules import RULES
 from armlab.protocols.joint_1dof.diagnosis.time_varying import scan_operating_point
 
@@ -270,6 +271,8 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
             "sensor_noise_floor": sensor_floor,
             "derivative_floor": deriv_floor,
             "noise_source": noise.source,
+            # the recorded angle's error and the gap it leaves in the nominal (not in the floor)
+            "position_sensor": position_sensor_summary(trials, nominal.beta, y_band, cfg.band_hz),
         },
         "where": {
             "bands": stages[0]["bands"],

@@ -13,7 +13,10 @@ it in the tests):
 - **intrinsic** replacement of ``[θ̈, θ̇, θ]`` by a series-compliance response
   (``cuff_compliance``: the pedal's own inertia stays rigid on the sensor side;
   ``transmission_compliance``: everything beyond the spring);
-- **output** transforms of every column (``channel_delay``, ``force_sensor_bandwidth``).
+- **output** transforms of every column (``channel_delay``, ``force_sensor_bandwidth``);
+- **position** errors: ``[θ̈, θ̇, θ]`` of the recorded angle through a Wiener smoother
+  (``encoder_quantisation`` on a recording whose angle lies on a grid, ``position_sensor_noise``
+  on one that does not; :mod:`.position_sensor`, which also gives the floor they leave).
 
 ``payload_mass`` changes nothing the nominal calibration does not already absorb (the joint's
 inertia is calibrated): it is listed but cannot be identified from these trials.
@@ -33,6 +36,12 @@ from armlab.diagnosis.families import ModelFamily, NLParam, Surrogate, lowpass2,
 from armlab.dsp import bilinear
 from armlab.protocols.joint_1dof.diagnosis.data import PreparedTrial
 from armlab.protocols.joint_1dof.diagnosis.local import local_gains, local_level
+from armlab.protocols.joint_1dof.diagnosis.position_sensor import (
+    GRID_EFFECT,
+    GRID_LEVELS,
+    NOISE_EFFECT,
+    denoised_columns,
+)
 
 __all__ = [
     "JOINT_FAMILY",
@@ -137,6 +146,12 @@ def _columns(
         values = (theta[f"{key}.tau2_s2"], theta[f"{key}.tau1_s"], theta[f"{key}.ratio"])
         h = _effect_column(tr, "compliance", values)
         cols = [h, tr.a] if key == "cuff_compliance" else [h]
+    elif GRID_EFFECT in names or NOISE_EFFECT in names:  # the de-noised angle's [θ̈, θ̇, θ]
+        if GRID_EFFECT in names:
+            d = denoised_columns(tr, GRID_EFFECT, theta[f"{GRID_EFFECT}.level"])
+        else:
+            d = denoised_columns(tr, NOISE_EFFECT)
+        cols = [d[:, 0], d[:, 1], d[:, 2]]
     else:
         cols = [tr.a, tr.v, tr.x]
     if "reflex" in names:
@@ -229,6 +244,9 @@ JOINT_SURROGATES: dict[str, Surrogate] = {
         ),
         # a slow torque the position does not predict, from its neighbours' level (:mod:`.local`)
         Surrogate("voluntary_torque", "additive", (), ("gain",)),
+        # the recorded angle's own error, on a grid or white (:mod:`.position_sensor`)
+        Surrogate(GRID_EFFECT, "position", (NLParam("level", *GRID_LEVELS, log=True),)),
+        Surrogate(NOISE_EFFECT, "position"),
         Surrogate("payload_mass", "absorbed"),
     )
 }

@@ -1,0 +1,138 @@
+"""The recorded angle's own errors in the joint_1dof diagnosis: an encoder's grid
+(``encoder_quantisation``) and a white position noise (``position_sensor_noise``), both through the
+Wiener-smoothed angle of :mod:`...diagnosis.position_sensor`. Synthetic NumPy recordings with a
+known truth (conftest.py): the torque comes from the true angle, the file holds the sensor's.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+from conftest import (
+    JOINT_B,
+    JOINT_FS_HZ,
+    JOINT_I,
+    JOINT_K,
+    JointTrial,
+    friction_torque,
+    nominal_torque,
+    prbs_position,
+    prepared,
+    reflex_torque,
+)
+
+from armlab.config.diagnosis import DiagnosisConfig
+from armlab.protocols.joint_1dof.diagnosis.diagnose import diagnose_joint
+from armlab.protocols.joint_1dof.diagnosis.position_sensor import (
+    grid_step,
+    position_floor,
+    white_level,
+)
+
+# a reduced candidate list keeps these CI tests cheap; reflex and friction stay as the rivals
+_CANDIDATES = ["reflex", "joint_friction", "encoder_quantisation", "position_sensor_noise"]
+_STEP = 2 * np.pi / 4096  # rad, a 12-bit encoder (the ODE referee's coarsest)
+_NOISE = 0.05  # N·m, torque noise
+
+
+def _grid(x, step, rng):
+    """The angle rounded to a grid of ``step`` with a random offset (mid-tread, like the sensors)."""
+    offset = rng.uniform(0.0, step)
+    return np.round((x - offset) / step) * step + offset
+
+
+def _records(kind, seed, *, duration_s=14.0, smooth_hz=4.0):
+    """Two recordings of one slow PRBS (smoothed at ``smooth_hz``: the band above it is the
+    sensor's error alone) with the torque of the true angle; ``kind`` picks what is recorded."""
+    rng = np.random.default_rng(seed)
+    from conftest import prbs_steps, smooth
+
+    x = smooth(prbs_steps(rng, duration_s), smooth_hz)
+    out = []
+    for k in range(2):
+        y = nominal_torque(x) + rng.normal(0, _NOISE, x.size)
+        pos = x
+        if kind == "grid":
+            pos = _grid(x, _STEP, rng)
+        elif kind == "white":
+            pos = x + rng.normal(0, 3e-4, x.size)
+        elif kind == "reflex":
+            y = y + reflex_torque(x, delay_s=0.045, gain=2.0)
+        elif kind == "friction":
+            y = y + friction_torque(x, coulomb=0.3)
+        out.append(JointTrial(f"rep{k}", pos, y))
+    return out
+
+
+def test_grid_step_is_read_from_the_recorded_angle():
+    rng = np.random.default_rng(0)
+    x = prbs_position(rng, 5.0)
+    # the step comes back to its own round-off (CSV files keep 9 digits: far below 1e-6 of it)
+    assert grid_step(_grid(x, _STEP, rng)) == pytest.approx(_STEP, rel=1e-6)
+    assert grid_step(_grid(x, 1e-5, rng)) == pytest.approx(1e-5, rel=1e-6)
+    # a continuous angle, with or without noise, lies on no grid
+    assert grid_step(x) == 0.0
+    assert grid_step(x + rng.normal(0, 1e-4, x.size)) == 0.0
+
+
+def test_white_level_of_a_noisy_angle():
+    rng = np.random.default_rng(1)
+    x = prbs_position(rng, 20.0)
+    s = 3e-4
+    # the top half of the Nyquist band holds the noise alone (the PRBS is smoothed at 15 Hz):
+    # Welch's mean over 250 bins x 39 segments scatters by well under 1 % (measured 1.002), 5 % leaves
+    # room for the signal's tail
+    assert white_level(x + rng.normal(0, s, x.size), JOINT_FS_HZ, 0.0) == pytest.approx(s**2, rel=0.05)
+    assert white_level(x, JOINT_FS_HZ, _STEP) == pytest.approx(_STEP**2 / 12)
+
+
+def test_position_floor_is_the_error_the_nominal_carries():
+    """The torque error ``I·ë + B·ė + K·e`` of a white angle error, through the diagnosis' own
+    preparation (five-point differences, band-limiting, decimation), against position_floor."""
+    rng = np.random.default_rng(2)
+    x = prbs_position(rng, 20.0)
+    xn = x + rng.normal(0, 3e-4, x.size)
+    (tn, tt), _, _ = prepared([JointTrial("n", xn, 0 * x), JointTrial("t", x, 0 * x)])
+    err = JOINT_I * (tn.a - tt.a) + JOINT_B * (tn.v - tt.v) + JOINT_K * (tn.x - tt.x)
+    measured = float(np.var(err[tn.train | tn.held]))
+    predicted = position_floor(tn, np.array([JOINT_I, JOINT_B, JOINT_K]), band_hz=40.0)
+    # exact for white noise but for its own estimate of the level (~1 %, see above) and the
+    # variance of ~4000 band-limited samples at 250 Hz (~100 independent values per Hz of band:
+    # a few %): 10 %
+    assert measured == pytest.approx(predicted, rel=0.1)
+    # a grid's error is not white where the angle holds still (a constant per hold, which K
+    # carries into the band whole): measured 2.4 x the white prediction on this seed (white: 1.03)
+    xq = _grid(x, _STEP, rng)
+    (tq, tt), _, _ = prepared([JointTrial("q", xq, 0 * x), JointTrial("t", x, 0 * x)])
+    err = JOINT_I * (tq.a - tt.a) + JOINT_B * (tq.v - tt.v) + JOINT_K * (tq.x - tt.x)
+    beta = np.array([JOINT_I, JOINT_B, JOINT_K])
+    ratio = float(np.var(err[tq.train | tq.held])) / position_floor(tq, beta, band_hz=40.0)
+    assert 1.0 < ratio < 4.0
+
+
+@pytest.mark.parametrize(
+    ("kind", "expected"),
+    [("grid", "encoder_quantisation"), ("white", "position_sensor_noise"), ("none", "none")],
+)
+def test_position_errors_are_named_and_shrink_the_gap(kind, expected):
+    results, _ = diagnose_joint(_records(kind, seed=4), DiagnosisConfig(candidates=_CANDIDATES))
+    assert results["verdict"] == [expected]
+    gap = results["gap"]
+    pos = gap["position_sensor"]
+    assert pos["candidate"] == ("encoder_quantisation" if kind == "grid" else "position_sensor_noise")
+    if kind == "grid":
+        assert pos["grid_step_rad"] == pytest.approx(_STEP, rel=1e-6)  # the file's round-off only
+    if expected == "none":
+        return
+    excess = gap["nominal"] - gap["noise_floor"]
+    shrink = (gap["nominal"] - gap["added"][-1]["held_out_gap"]) / excess
+    # above the slow PRBS's 4 Hz corner the recorded angle is mostly the sensor's error, which the
+    # Wiener smoother removes; the issue's target is 0.7
+    assert shrink > 0.7
+
+
+@pytest.mark.parametrize(("kind", "expected"), [("reflex", "reflex"), ("friction", "joint_friction")])
+def test_torque_effects_are_not_named_position_errors(kind, expected):
+    results, _ = diagnose_joint(_records(kind, seed=5), DiagnosisConfig(candidates=_CANDIDATES))
+    assert results["verdict"][0] == expected
+    assert not {"encoder_quantisation", "position_sensor_noise"} & set(results["verdict"])
