@@ -218,6 +218,9 @@ JOINT_SURROGATES: dict[str, Surrogate] = {
         ),
         # a slow torque the position does not predict, from its neighbours' level (:mod:`.local`)
         Surrogate("voluntary_torque", "additive", (), ("gain",)),
+        # a torque-sensor bias drift: below the scoring band, scored there by :mod:`.low_band`
+        # (a slow cosine basis of time), never by the in-band selection
+        Surrogate("force_sensor_drift", "low_band"),
         Surrogate("payload_mass", "absorbed"),
     )
 }
