@@ -74,13 +74,14 @@ def test_drift_basis_is_orthonormal_and_holds_at_least_a_trend_and_a_bend():
 def test_noise_alone_fills_the_drift_band_as_the_noise_floor_predicts():
     """On a clean joint fitted with its true I, B, K, the slow cosines capture only noise: the
     mean captured power over 12 seeds is the predicted S·fs/2 per coefficient (2 trials × 2
-    cosines × 12 seeds = 48 χ² degrees of freedom: sd 0.2 of the ratio; 0.6 is 3 sd)."""
+    cosines × 12 seeds = 48 χ² degrees of freedom: sd 0.2 of the ratio; 0.6 is 3 sd), and the
+    χ² quantile keeps the false alarms at its probability."""
 
     class Nominal:
         beta = [np.array([-JOINT_I, -JOINT_B, -JOINT_K])] * 2
 
     cfg = DiagnosisConfig()
-    ratios = []
+    ratios, detected = [], []
     for seed in range(12):
         recs, _ = _records("none", seed)
         trials, hp, _ = prepare_scoring(recs, cfg)
@@ -89,7 +90,10 @@ def test_noise_alone_fills_the_drift_band_as_the_noise_floor_predicts():
             trials, Nominal, noise, hp, highpass_hz=cfg.highpass_hz, band_hz=cfg.band_hz, min_share=0.5
         )["force_sensor_drift"]
         ratios.append(low["captured_power_Nm2"] / low["noise_power_Nm2"])
+        detected.append(low["detected"])
     assert np.mean(ratios) == pytest.approx(1.0, abs=0.6)
+    # the detection's false alarms at FALSE_ALARM = 0.01: two or more of 12 has probability 0.6 %
+    assert sum(detected) <= 1
 
 
 @pytest.mark.parametrize(
