@@ -58,8 +58,8 @@ def test_an_unknown_generator_is_refused_naming_the_valid_ones(tmp_path):
 @pytest.mark.xfail(
     strict=True,
     reason="measured on the tuning seed 7 (2 replicates, docs/joint_1dof_referees.md): the diagnosis "
-    "has no candidate for encoder_quantisation, force_sensor_drift, voluntary_torque yet (issue 18 "
-    "item 3) and its rules were tuned on the MuJoCo referee only",
+    "has no candidate for encoder_quantisation yet and names a voluntary torque only from the scoring "
+    "band (issue 18 item 3); its rules were tuned on the MuJoCo referee only",
 )
 def test_full_ode_benchmark_meets_the_issue_targets(tmp_path):
     # issue 18: 10 replicates per class on the evaluation seed: top-1 >= 90 % where ENR >= 1, false
