@@ -22,6 +22,7 @@ from armlab.config.diagnosis import DiagnosisConfig
 from armlab.diagnosis.families import fit_model
 from armlab.errors import DataError
 from armlab.protocols.joint_1dof.diagnosis.data import (
+    fit_decimation,
     highpass_sos,
     noise_floor,
     prepare_trials,
@@ -50,10 +51,18 @@ def test_decimates_to_an_integer_fraction_of_the_recorded_rate():
     assert tr.fs_hz == 250.0 and tr.raw_fs_hz == JOINT_FS_HZ
     assert tr.x.size == x.size // 4 == tr.y.size == tr.v.size == tr.a.size == tr.m.size
     np.testing.assert_allclose(tr.t_s, np.arange(tr.x.size) / 250.0)
-    # 1000 / 300 is not an integer: round(3.33) = 3, so the fitting rate becomes 333.3 Hz
+    # 1000 / 300 is not an integer: the largest q keeping the rate at or above 300 Hz is 3, so the
+    # fitting rate becomes 333.3 Hz
     (tr3,) = prepare_trials([rec], **{**_KW, "fs_fit_hz": 300.0})
     assert tr3.fs_hz == pytest.approx(1000.0 / 3.0)
     assert tr3.x.size == -(-x.size // 3)
+
+
+@pytest.mark.parametrize(("fs", "fs_fit"), [(660.0, 330.0), (740.0, 370.0), (500.0, 250.0), (2000.0, 250.0)])
+def test_the_fitting_rate_is_never_below_the_asked_one(fs, fs_fit):
+    """660 Hz data (the ODE referee draws 500-2000 Hz) fit at 330 Hz, not at round(2.64) -> 220 Hz,
+    whose 110 Hz Nyquist cannot carry the sensor-bandwidth candidate (the diagnosis was refused)."""
+    assert fs / fit_decimation(fs, 250.0) == pytest.approx(fs_fit)
 
 
 def test_last_fraction_is_held_out_and_the_ends_are_not_scored():
@@ -179,7 +188,7 @@ def test_first_and_last_samples_are_band_limited_too():
         ),
         (
             [JointTrial("a", np.zeros(8000), np.zeros(8000))],
-            {"fs_fit_hz": 80.0},  # q = round(12.5) = 12: 83.3 Hz, Nyquist margin needs 40/0.45 = 89 Hz
+            {"fs_fit_hz": 80.0},  # q = floor(12.5) = 12: 83.3 Hz, Nyquist margin needs 40/0.45 = 89 Hz
             "diagnosis.band_hz=40 Hz needs a fitting rate above 89 Hz; the data (1000 Hz) with "
             "diagnosis.fs_fit_hz=80 give 83.3333 Hz",
         ),

@@ -24,7 +24,7 @@ class DiagnosisConfig:
 
     candidates: list[str] | None = None  # None: every catalogue effect the protocol can simulate
     exclude: list[str] = field(default_factory=list)  # candidates left out (e.g. to test "unknown")
-    fs_fit_hz: float = 250.0  # Hz, models are fitted at this rate (integer decimation)
+    fs_fit_hz: float = 250.0  # Hz, models are fitted at this rate or just above (integer decimation)
     band_hz: float = 40.0  # Hz, top of the analysed band (issue 5's bands end at 40 Hz)
     highpass_hz: float = 0.3  # Hz, below: voluntary/tonic torque, not scored
     slow_hz: float = 0.3  # Hz, tonic-level covariate of the co-contraction candidate

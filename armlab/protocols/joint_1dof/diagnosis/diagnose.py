@@ -26,7 +26,13 @@ from armlab.diagnosis.localise import band_breakdown, frf_parameters, residual_t
 from armlab.diagnosis.summary import gap_section, stage_entry
 from armlab.dsp import zero_phase
 from armlab.errors import ConfigError, DataError
-from armlab.protocols.joint_1dof.diagnosis.data import highpass_sos, noise_floor, prepare_trials
+from armlab.protocols.joint_1dof.diagnosis.data import (
+    fit_decimation,
+    highpass_sos,
+    noise_floor,
+    prepare_trials,
+)
+from armlab.protocols.joint_1dof.diagnosis.derivative_floor import derivative_floor
 from armlab.protocols.joint_1dof.diagnosis.low_band import low_band_check
 from armlab.protocols.joint_1dof.diagnosis.models import (
     JOINT_FAMILY,
@@ -110,7 +116,7 @@ def check_referee(ref, cfg: DiagnosisConfig) -> None:
     (the checks :func:`prepare_trials` and the candidates' rates apply to the data), before the
     referee simulates any."""
     fs = float(ref.fs_hz)
-    fs_fit = fs / max(1, int(round(fs / cfg.fs_fit_hz)))
+    fs_fit = fs / fit_decimation(fs, cfg.fs_fit_hz)
     try:
         if cfg.band_hz >= 0.45 * fs_fit:
             raise DataError(
@@ -207,7 +213,11 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
     noise = noise_floor(records, trials, band_hz=cfg.band_hz, highpass_hz=cfg.highpass_hz)
     n_h = sum(int(np.sum(tr.held)) for tr in trials)
     tss = sum(float(np.sum(y[tr.held] ** 2)) for y, tr in zip(y_band, trials, strict=True))
-    floor = noise.variance_Nm2 * n_h / tss
+    sensor_floor = noise.variance_Nm2 * n_h / tss
+    # what the choice of derivative estimator alone leaves under a perfect nominal: it joins the
+    # sensor noise wherever the rules read the floor (:mod:`.derivative_floor`)
+    deriv_floor = derivative_floor(records, trials, hp) / tss
+    floor = sensor_floor + deriv_floor
     names = candidate_names(cfg)
     _check_rate(names, fs, records[0].fs_hz)
     band_share = (cfg.band_hz - cfg.highpass_hz) / (0.5 * fs)
@@ -270,6 +280,8 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
         "ranking_steps": steps,
         "gap": {
             **gap_section(_METRIC, stages, floor),
+            "sensor_noise_floor": sensor_floor,
+            "derivative_floor": deriv_floor,
             "noise_source": noise.source,
         },
         "where": {

@@ -1,0 +1,107 @@
+"""The floor that derivative estimation itself leaves under the joint_1dof nominal.
+
+The nominal ``τ = I·θ̈ + B·θ̇ + K·θ`` is a statement about continuous signals; the diagnosis
+evaluates it on velocity and acceleration estimated from the sampled angle by five-point central
+differences (:func:`armlab.dsp.five_point_derivatives`). Whoever produced the torque (a simulator,
+a lab's model, the physics itself) did not necessarily differentiate that way, so even a perfect
+nominal leaves a residual of the order of the spread between derivative estimators. When the
+sensor noise is very low (1e-4 of the torque's rms) that spread, not the noise, sets the
+smallest gap a correct model can reach, and a clean recording would otherwise be called
+``unknown``.
+
+:func:`derivative_floor` measures it on each recording: the torque the nominal would predict
+with the plainest common estimator, central differences applied twice (``numpy.gradient``, as
+MATLAB's ``gradient``: truncation error ``h²/6·θ‴`` of the velocity, ``h²/3·θ⁗`` of the
+acceleration), less the same nominal with the diagnosis' five-point derivatives, passed through
+the diagnosis' own band-limiting, decimation and scoring high-pass; the nominal's columns are then
+fitted to that difference on the training part (a perfect model absorbs what its own parameters
+can), and what is left over the held-out part is the *spread*. The nominal's I and B are those of
+a least-squares fit of the measured torque on the training part.
+
+The floor is the spread only as far as the recording shows it: the held-out residual of the
+nominal fitted with the five-point derivatives less that of the nominal fitted with the
+two-point ones, when positive (the torque was produced with a convention closer to the latter),
+and never more than the spread. A recording whose torque follows the continuous derivatives
+(a physical joint, an ODE) favours the five-point estimates and gets no derivative floor, so the
+floor lowers no effect's detectability there; a torque computed by a two-point convention gets the
+spread, which no effect of the catalogue needs to explain.
+
+It is a floor of the *model's evaluation*, not of the sensor, so it is reported beside the
+noise floor (``gap.derivative_floor``) and added to it wherever the acceptance rules read the
+floor. On recordings whose noise is above ~1e-3 of the torque's rms it is negligible (the REKLAB
+ankle trials: below 1e-3 of the noise floor).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from armlab.dsp import five_point_derivatives, zero_phase
+from armlab.protocols.joint_1dof.diagnosis.data import PreparedTrial
+
+__all__ = ["derivative_floor"]
+
+
+def _two_point_difference(x: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray]:
+    """(velocity, acceleration) by central differences applied twice (``numpy.gradient``)."""
+    v = np.gradient(x, 1.0 / fs, edge_order=2)
+    return v, np.gradient(v, 1.0 / fs, edge_order=2)
+
+
+# sixth-order central stencils (Fornberg 1988, Math. Comp. 51:699, Table 1), oldest sample first
+_SEVEN_V = np.array([-1.0, 9.0, -45.0, 0.0, 45.0, -9.0, 1.0]) / 60.0
+_SEVEN_A = np.array([2.0, -27.0, 270.0, -490.0, 270.0, -27.0, 2.0]) / 180.0
+
+
+def _seven_point(x: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray]:
+    """(velocity, acceleration) by seven-point central differences (truncation ``O(h⁶)``); the
+    three samples at each end keep the five-point values."""
+    v, a = five_point_derivatives(x, fs, axis=0)
+    v[3:-3] = np.correlate(x, _SEVEN_V, mode="valid") * fs
+    a[3:-3] = np.correlate(x, _SEVEN_A, mode="valid") * fs * fs
+    return v, a
+
+
+#: The other estimators a torque may have been computed with: the plainest common one and a
+#: more accurate one than the diagnosis' own (the continuous derivative's closest neighbour).
+_ALTERNATIVES = (_two_point_difference, _seven_point)
+
+
+def derivative_floor(records, prepared: tuple[PreparedTrial, ...], hp: np.ndarray) -> float:
+    """N·m² summed over every trial's held-out samples: the scoring-band residual that the
+    choice of derivative estimator alone leaves under the nominal (module docstring).
+
+    Divide by the held-out measured power (sum of squares) for the floor as a gap fraction.
+
+    Args:
+        records: the imported trials (raw rate: ``position`` rad, ``torque`` N·m, ``fs_hz``).
+        prepared: their prepared versions (:func:`.data.prepare_trials`), in the same order.
+        hp: second-order sections of the scoring high-pass at the fitting rate.
+    """
+    total = 0.0
+    for r, tr in zip(records, prepared, strict=True):
+        fs = tr.raw_fs_hz
+        xr = np.asarray(r.position, float)
+        y = zero_phase(hp, tr.y)
+        ones = np.ones_like(tr.x)
+        phi = zero_phase(hp, np.stack([tr.a, tr.v, tr.x, ones], axis=1), axis=0)
+        beta, left5 = _held_out_fit(phi, y, tr)
+        floor = 0.0
+        for estimator in _ALTERNATIVES:
+            v2, a2 = estimator(xr, fs)
+            phi2 = zero_phase(
+                hp, np.stack([tr.to_fit_rate(a2), tr.to_fit_rate(v2), tr.x, ones], axis=1), axis=0
+            )
+            left2 = _held_out_fit(phi2, y, tr)[1]
+            # the estimators' difference in the nominal's prediction, less what the nominal absorbs
+            spread = _held_out_fit(phi, (phi2[:, :2] - phi[:, :2]) @ beta[:2], tr)[1]
+            # a floor only where the data favour the other estimator, and never above the spread
+            floor = max(floor, min(spread, max(left5 - left2, 0.0)))
+        total += floor
+    return total
+
+
+def _held_out_fit(phi: np.ndarray, y: np.ndarray, tr: PreparedTrial) -> tuple[np.ndarray, float]:
+    """(coefficients fitted on the training part, residual sum of squares on the held-out part)."""
+    beta, *_ = np.linalg.lstsq(phi[tr.train], y[tr.train], rcond=None)
+    return beta, float(np.sum((y - phi @ beta)[tr.held] ** 2))
