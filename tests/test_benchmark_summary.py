@@ -175,6 +175,17 @@ def test_score_case_right_first_guess_and_shrink():
     assert s["gap_final"] == 0.014
 
 
+def test_score_case_takes_the_shrink_of_an_effect_named_below_the_scoring_band():
+    # joint_1dof's force_sensor_drift: the scoring band's gap is the nominal's (at the floor), the
+    # shrink is the drift's own, of the slow excess (results["low_band"], docs/diagnosis_schema.md)
+    res = _results(["force_sensor_drift"], [], 0.0102, 0.01, [])
+    res["low_band"] = {"named": True, "force_sensor_drift": {"shrink": 0.93}}
+    s = scoring.score_case("force_sensor_drift", res, {"force_sensor_drift"})
+    assert s["top1"] and s["exact"] and s["shrink_of_excess"] == 0.93
+    res["low_band"]["named"] = False  # reported, not named: the band's shrink stays
+    assert scoring.score_case("none", res | {"verdict": ["none"]}, {"none"})["shrink_of_excess"] == 0.0
+
+
 def test_score_case_second_guess_and_partial_pairs():
     s = score_case("reflex", _results(["channel_delay"], ["channel_delay", "reflex"], 0.05, 0.01, [0.03]))
     assert not s["top1"] and s["top2"] and not s["exact"]

@@ -66,14 +66,14 @@ def _train_rss(model, trials):
 def test_surrogates_cover_the_joint_protocol_effects():
     joint = set(registry.get("joint_1dof").catalogue)
     assert set(S) <= joint
-    # the rest are the torque sensor's noise and drift: they set the floor or sit below the
-    # scoring band, no candidate model is needed; and operating_point_impedance, which the
-    # time-varying nominal carries (JOINT_TV_FAMILY, on recordings with an operating angle)
+    # the rest are the torque sensor's noise: it sets the floor, no candidate model is needed (the
+    # drift is one, scored below the scoring band: kind "low_band"); and operating_point_impedance,
+    # which the time-varying nominal carries (JOINT_TV_FAMILY, on recordings with an operating angle)
     rest = joint - set(S) - {"operating_point_impedance"}
     assert all(EFFECTS[n].LEVEL == "sensor" for n in rest)
     assert OP_LINEAR_NAMES and all(n.startswith("operating_point.") for n in OP_LINEAR_NAMES)
     for s in S.values():
-        assert s.kind in ("additive", "intrinsic", "output", "position", "absorbed")
+        assert s.kind in ("additive", "intrinsic", "output", "position", "absorbed", "low_band")
         for p in s.params:
             assert p.lower < p.upper and all(p.lower <= g <= p.upper for g in p.grid)
 

@@ -51,7 +51,9 @@ class Surrogate:
     """One effect's change to the joint model (see the module docstring)."""
 
     name: str
-    kind: str  # "additive" | "intrinsic" | "output" | "position" | "absorbed"
+    # "additive" | "intrinsic" | "output" | "position" | "absorbed" | "low_band" (scored by the protocol
+    # below its band)
+    kind: str
     params: tuple[NLParam, ...] = ()
     linear: tuple[str, ...] = ()  # names of the linear parameters it adds (per trial)
     absorbed_by: str = "limb inertia"  # kind "absorbed": the nominal parameter that takes it up

@@ -33,6 +33,7 @@ from armlab.protocols.joint_1dof.diagnosis.data import (
     prepare_trials,
 )
 from armlab.protocols.joint_1dof.diagnosis.derivative_floor import derivative_floor
+from armlab.protocols.joint_1dof.diagnosis.low_band import low_band_check
 from armlab.protocols.joint_1dof.diagnosis.models import (
     JOINT_FAMILY,
     JOINT_SURROGATES,
@@ -229,7 +230,7 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
         trials,
         y_band,
         hp,
-        {n: JOINT_SURROGATES[n] for n in names},
+        {n: JOINT_SURROGATES[n] for n in names if JOINT_SURROGATES[n].kind != "low_band"},
         floor,
         cfg,
         band_share=band_share,
@@ -262,6 +263,18 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
         explained = explains_enough(cfg, left=left, excess0=excess, floor=floor)
         verdict = [_OP_EFFECT, *accepted] if explained else [_OP_EFFECT, *accepted, "unknown"]
         partial = [] if explained else [_OP_EFFECT, *accepted]
+    # below the scoring band (:mod:`.low_band`): a drift is named where the band itself needs nothing
+    low = low_band_check(
+        trials,
+        nominal,
+        noise,
+        hp,
+        highpass_hz=cfg.highpass_hz,
+        band_hz=cfg.band_hz,
+        min_share=cfg.min_explained,
+    )
+    if verdict == ["none"] and low["named"] and "force_sensor_drift" in names:
+        verdict = ["force_sensor_drift"]
     results = {
         "verdict": verdict,
         "ranking": ranking,
@@ -287,6 +300,7 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
         "partial": partial,
         "torque_sign": "antiphase (impedance = -torque/position)" if sign < 0 else "in phase",
         **({"operating_point": varying} if varying is not None else {}),
+        "low_band": low,
         "trials": [tr.name for tr in trials],
     }
     series = {

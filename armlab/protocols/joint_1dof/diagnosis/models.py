@@ -247,6 +247,9 @@ JOINT_SURROGATES: dict[str, Surrogate] = {
         # the recorded angle's own error, on a grid or white (:mod:`.position_sensor`)
         Surrogate(GRID_EFFECT, "position", (NLParam("level", *GRID_LEVELS, log=True),)),
         Surrogate(NOISE_EFFECT, "position"),
+        # a torque-sensor bias drift: below the scoring band, scored there by :mod:`.low_band`
+        # (a slow cosine basis of time), never by the in-band selection
+        Surrogate("force_sensor_drift", "low_band"),
         Surrogate("payload_mass", "absorbed"),
     )
 }

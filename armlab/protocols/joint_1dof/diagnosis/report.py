@@ -38,6 +38,7 @@ from armlab.diagnosis.report_text import (
     window_meaning,
     xcorr_meaning,
 )
+from armlab.protocols.joint_1dof.diagnosis.report_low_band import drift_verdict_paragraph, low_band_section
 from armlab.protocols.joint_1dof.diagnosis.report_operating_point import operating_point_section
 from armlab.protocols.joint_1dof.diagnosis.rules import RULES
 
@@ -357,8 +358,9 @@ def _how_far(r: Mapping[str, Any], h: str) -> list[str]:
 
 def _one(r: Mapping[str, Any], h: str, settings: Mapping[str, Any] | None) -> list[str]:
     op = operating_point_section(r, h)
+    low = low_band_section(r, h)
     return [
-        verdict_paragraph(r, settings),
+        drift_verdict_paragraph(r) or verdict_paragraph(r, settings),
         "",
         *([*op, ""] if op else []),
         *_where(r, h),
@@ -366,6 +368,7 @@ def _one(r: Mapping[str, Any], h: str, settings: Mapping[str, Any] | None) -> li
         *_which(r, h, settings),
         "",
         *_how_far(r, h),
+        *(["", *low] if low else []),
     ]
 
 
