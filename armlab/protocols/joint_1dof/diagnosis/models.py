@@ -90,6 +90,16 @@ def _compliance(tr: PreparedTrial, tau2: float, tau1: float, ratio: float) -> np
     return tr.to_fit_rate(signal.lfilter(b, a, tr.x_raw - x0) + ratio / (1.0 + ratio) * x0)
 
 
+@lru_cache(maxsize=64)  # 6 trials x the delays in flight (the grid's 23, a few refinements)
+def _delayed_velocity(tr: PreparedTrial, delay_s: float) -> np.ndarray:
+    """The trial's velocity delayed by ``delay_s`` (a spectral shift), remembered (read-only): the
+    reflex's grid repeats each delay for every cut-off, direction and damping (16 columns), and the
+    shift was most of the search's time on the REKLAB folder."""
+    out = shift_columns(tr.t_s, tr.v, delay_s)
+    out.flags.writeable = False
+    return out
+
+
 @lru_cache(maxsize=192)  # 6 trials x 3 effects x a few parameter sets in flight (~150 kB each)
 def _effect_column(tr: PreparedTrial, name: str, values: tuple[float, ...]) -> np.ndarray:
     """One effect's regressor column(s) of one trial, remembered (read-only).
@@ -101,7 +111,7 @@ def _effect_column(tr: PreparedTrial, name: str, values: tuple[float, ...]) -> n
     """
     if name == "reflex":
         d, s, cutoff, zeta = values
-        stretch = np.maximum(s * shift_columns(tr.t_s, tr.v, d), 0.0)
+        stretch = np.maximum(s * _delayed_velocity(tr, d), 0.0)
         out = s * lowpass2(stretch, cutoff, zeta, tr.fs_hz)
     elif name == "joint_friction":
         out = tr.to_fit_rate(_friction(tr.v_raw, *values, tr.raw_fs_hz))
