@@ -118,8 +118,8 @@ def test_the_derivative_floor_appears_only_where_the_data_favour_another_estimat
         if kind == "exact":
             assert gap["derivative_floor"] < 0.01 * gap["sensor_noise_floor"]
         else:
-            trials, hp, _ = prepared(records, cfg)
-            assert derivative_floor(records, trials, hp) > 0
+            trials, hp, y_band = prepared(records, cfg)
+            assert derivative_floor(trials, hp, y_band) > 0
             assert gap["derivative_floor"] == pytest.approx(
                 gap["nominal"] - gap["sensor_noise_floor"], rel=0.1
             )

@@ -64,6 +64,11 @@ def _records(kind, seed, *, duration_s=14.0, smooth_hz=4.0):
     return out
 
 
+def _white(tr) -> float:
+    """rad², the trial's white position-error level as the diagnosis reads it."""
+    return white_level(tr.x_raw, tr.raw_fs_hz, grid_step(tr.x_raw))
+
+
 def test_grid_step_is_read_from_the_recorded_angle():
     rng = np.random.default_rng(0)
     x = prbs_position(rng, 5.0)
@@ -95,7 +100,7 @@ def test_position_floor_is_the_error_the_nominal_carries():
     (tn, tt), _, _ = prepared([JointTrial("n", xn, 0 * x), JointTrial("t", x, 0 * x)])
     err = JOINT_I * (tn.a - tt.a) + JOINT_B * (tn.v - tt.v) + JOINT_K * (tn.x - tt.x)
     measured = float(np.var(err[tn.train | tn.held]))
-    predicted = position_floor(tn, np.array([JOINT_I, JOINT_B, JOINT_K]), band_hz=40.0)
+    predicted = position_floor(tn, np.array([JOINT_I, JOINT_B, JOINT_K]), 40.0, _white(tn))
     # exact for white noise but for its own estimate of the level (~1 %, see above) and the
     # variance of ~4000 band-limited samples at 250 Hz (~100 independent values per Hz of band:
     # a few %): 10 %
@@ -106,7 +111,7 @@ def test_position_floor_is_the_error_the_nominal_carries():
     (tq, tt), _, _ = prepared([JointTrial("q", xq, 0 * x), JointTrial("t", x, 0 * x)])
     err = JOINT_I * (tq.a - tt.a) + JOINT_B * (tq.v - tt.v) + JOINT_K * (tq.x - tt.x)
     beta = np.array([JOINT_I, JOINT_B, JOINT_K])
-    ratio = float(np.var(err[tq.train | tq.held])) / position_floor(tq, beta, band_hz=40.0)
+    ratio = float(np.var(err[tq.train | tq.held])) / position_floor(tq, beta, 40.0, _white(tq))
     assert 1.0 < ratio < 4.0
 
 

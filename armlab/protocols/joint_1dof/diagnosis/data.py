@@ -47,6 +47,7 @@ __all__ = [
     "EDGE_SAMPLES",
     "NoiseFloor",
     "PreparedTrial",
+    "band_power_gain",
     "derivatives",
     "fit_decimation",
     "highpass_sos",
@@ -353,6 +354,15 @@ def noise_floor(records, prepared, *, band_hz: float, highpass_hz: float, nperse
     return _difference_floor(records, prepared, band_hz, hp, nperseg)
 
 
+def band_power_gain(f_hz: np.ndarray, *, fs_hz: float, raw_fs_hz: float, band_hz: float, hp: np.ndarray):
+    """(n_f,) 1: the power gain of the scoring band on white noise at ``f_hz``: the anti-alias
+    low-pass at the recorded rate and the scoring high-pass at the fitting rate, each zero-phase
+    (forward-backward: its power gain applied twice)."""
+    _, h_lp = signal.sosfreqz(butterworth(band_hz, raw_fs_hz, _BAND_ORDER), worN=f_hz, fs=raw_fs_hz)
+    _, h_hp = signal.sosfreqz(hp, worN=f_hz, fs=fs_hz)
+    return np.abs(h_lp) ** 4 * np.abs(h_hp) ** 4
+
+
 def _difference_floor(records, prepared, band_hz, hp, nperseg: int) -> NoiseFloor:
     """Noise floor from k-th differences of the raw torque (white noise assumed)."""
     fs = prepared[0].fs_hz
@@ -362,9 +372,7 @@ def _difference_floor(records, prepared, band_hz, hp, nperseg: int) -> NoiseFloo
     f = np.fft.rfftfreq(nperseg, 1.0 / fs)
     # white noise of variance s2 over 0..raw_fs/2 has the one-sided density 2*s2/raw_fs; the
     # zero-phase (forward-backward) filters apply their power gain twice
-    _, h_lp = signal.sosfreqz(butterworth(band_hz, raw_fs, _BAND_ORDER), worN=f, fs=raw_fs)
-    _, h_hp = signal.sosfreqz(hp, worN=f, fs=fs)
-    psd = 2.0 * s2 / raw_fs * np.abs(h_lp) ** 4 * np.abs(h_hp) ** 4
+    psd = 2.0 * s2 / raw_fs * band_power_gain(f, fs_hz=fs, raw_fs_hz=raw_fs, band_hz=band_hz, hp=hp)
     return NoiseFloor(
         variance_Nm2=float(np.trapezoid(psd, f)),
         psd=psd,

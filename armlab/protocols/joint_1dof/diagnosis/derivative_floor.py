@@ -67,22 +67,20 @@ def _seven_point(x: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray]:
 _ALTERNATIVES = (_two_point_difference, _seven_point)
 
 
-def derivative_floor(records, prepared: tuple[PreparedTrial, ...], hp: np.ndarray) -> float:
+def derivative_floor(prepared: tuple[PreparedTrial, ...], hp: np.ndarray, y_band) -> float:
     """N·m² summed over every trial's held-out samples: the scoring-band residual that the
     choice of derivative estimator alone leaves under the nominal (module docstring).
 
     Divide by the held-out measured power (sum of squares) for the floor as a gap fraction.
 
     Args:
-        records: the imported trials (raw rate: ``position`` rad, ``torque`` N·m, ``fs_hz``).
-        prepared: their prepared versions (:func:`.data.prepare_trials`), in the same order.
+        prepared: the prepared trials (:func:`.data.prepare_trials`; their raw angle ``x_raw``).
         hp: second-order sections of the scoring high-pass at the fitting rate.
+        y_band: per trial, the measured torque in the scoring band (``zero_phase(hp, tr.y)``).
     """
     total = 0.0
-    for r, tr in zip(records, prepared, strict=True):
-        fs = tr.raw_fs_hz
-        xr = np.asarray(r.position, float)
-        y = zero_phase(hp, tr.y)
+    for tr, y in zip(prepared, y_band, strict=True):
+        fs, xr = tr.raw_fs_hz, tr.x_raw
         ones = np.ones_like(tr.x)
         phi = zero_phase(hp, np.stack([tr.a, tr.v, tr.x, ones], axis=1), axis=0)
         beta, left5 = _held_out_fit(phi, y, tr)

@@ -217,7 +217,7 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
     sensor_floor = noise.variance_Nm2 * n_h / tss
     # what the choice of derivative estimator alone leaves under a perfect nominal: it joins the
     # sensor noise wherever the rules read the floor (:mod:`.derivative_floor`)
-    deriv_floor = derivative_floor(records, trials, hp) / tss
+    deriv_floor = derivative_floor(trials, hp, y_band) / tss
     floor = sensor_floor + deriv_floor
     names = candidate_names(cfg)
     _check_rate(names, fs, records[0].fs_hz)

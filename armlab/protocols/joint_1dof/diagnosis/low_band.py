@@ -41,10 +41,10 @@ torque otherwise; the section is reported either way).
 from __future__ import annotations
 
 import numpy as np
-from scipy import signal
 from scipy.stats import chi2
 
-from armlab.dsp import butterworth, zero_phase
+from armlab.dsp import zero_phase
+from armlab.protocols.joint_1dof.diagnosis.data import band_power_gain
 
 __all__ = [
     "DRIFT_HZ",
@@ -63,7 +63,6 @@ FALSE_ALARM = 0.01  # 1, probability that pure noise passes the detection (χ² 
 # cosines, 3.3x at 8) would miss more often than not
 FOLD_S = 2.0  # s, cross-fitting block: longer than the low band's correlation time (1/(2·0.3 Hz)),
 # so a block's noise is nearly independent of the samples that predict it
-_BAND_ORDER = 4  # the anti-alias low-pass of data.py (one-way order)
 
 
 def drift_basis(n: int, fs_hz: float) -> np.ndarray:
@@ -79,9 +78,8 @@ def white_density(noise, *, fs_hz: float, raw_fs_hz: float, band_hz: float, hp: 
     ``noise.variance_Nm2`` (the anti-alias low-pass at the recorded rate and the scoring high-pass,
     both zero-phase, as in :func:`.data.noise_floor`)."""
     f = np.linspace(0.0, fs_hz / 2, 4097)
-    _, h_lp = signal.sosfreqz(butterworth(band_hz, raw_fs_hz, _BAND_ORDER), worN=f, fs=raw_fs_hz)
-    _, h_hp = signal.sosfreqz(hp, worN=f, fs=fs_hz)
-    return float(noise.variance_Nm2 / np.trapezoid(np.abs(h_lp) ** 4 * np.abs(h_hp) ** 4, f))
+    gain = band_power_gain(f, fs_hz=fs_hz, raw_fs_hz=raw_fs_hz, band_hz=band_hz, hp=hp)
+    return float(noise.variance_Nm2 / np.trapezoid(gain, f))
 
 
 def _lowpass_gain(highpass_hz: float) -> float:

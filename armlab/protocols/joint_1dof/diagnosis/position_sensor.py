@@ -140,15 +140,13 @@ def denoised_columns(tr, effect: str, level: float = 1.0) -> np.ndarray:
     return out
 
 
-def position_floor(tr, beta: np.ndarray, band_hz: float, n_impulse: int = 8001) -> float:
+def position_floor(tr, beta: np.ndarray, band_hz: float, s2: float, n_impulse: int = 8001) -> float:
     """N·m², per-sample variance that the angle's white error leaves in the fitting-rate torque of
     the nominal ``beta = (I, B, K, ...)``: ``σ²·Σh²`` with ``h`` the impulse response of
     ``I·d²/dt² + B·d/dt + K`` by five-point differences, band-limited like the columns (the
     scoring high-pass removes a negligible share of an error whose power lies near the band's
-    edge); σ² of :func:`white_level`. What no model of the recorded angle removes where the
-    Wiener smoother passes everything (module docstring)."""
-    step = grid_step(tr.x_raw)
-    s2 = white_level(tr.x_raw, tr.raw_fs_hz, step)
+    edge); ``s2`` rad², the error's white level (:func:`white_level`). What no model of the
+    recorded angle removes where the Wiener smoother passes everything (module docstring)."""
     imp = np.zeros(n_impulse)
     imp[n_impulse // 2] = 1.0
     v, a = five_point_derivatives(imp, tr.raw_fs_hz, axis=0)
@@ -167,16 +165,14 @@ def position_sensor_summary(trials, betas, y_band, band_hz: float) -> dict:
     step)."""
     steps = [grid_step(tr.x_raw) for tr in trials]
     grid = all(q > 0 for q in steps)
+    white = [white_level(tr.x_raw, tr.raw_fs_hz, q) for tr, q in zip(trials, steps, strict=True)]
     var = 0.0
-    for tr, beta in zip(trials, betas, strict=True):
-        b = np.asarray(beta, float)[:3]
-        var += position_floor(tr, b, band_hz) * int(np.sum(tr.held))
+    for tr, beta, s2 in zip(trials, betas, white, strict=True):
+        var += position_floor(tr, np.asarray(beta, float)[:3], band_hz, s2) * int(np.sum(tr.held))
     tss = sum(float(np.sum(y[tr.held] ** 2)) for y, tr in zip(y_band, trials, strict=True))
     return {
         "candidate": GRID_EFFECT if grid else NOISE_EFFECT,
         "grid_step_rad": float(np.mean(steps)) if grid else None,
-        "white_rad2": float(
-            np.mean([white_level(tr.x_raw, tr.raw_fs_hz, q) for tr, q in zip(trials, steps, strict=True)])
-        ),
+        "white_rad2": float(np.mean(white)),
         "floor": var / tss,
     }
