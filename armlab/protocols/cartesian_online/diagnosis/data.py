@@ -20,22 +20,18 @@ model stays linear). Whole sequences are held
 out: every third stop, starting with the second (the field is fitted on the others around the
 circle and predicts the held-out ones).
 
-Noise floor: the white force noise of each axis from the second differences of the raw force
-(Rice 1984: ``E[(Δ²F)²] = 6σ²``), by the mean of the lowest 90 % of their squares (divided by
-:data:`TRIMMED_CHI2_MEAN`, that mean for a χ² with one degree of freedom), so the few samples at
-the triangle's corners, where the force itself bends, do not count; then through the band's
-zero-phase filter (its exact white-noise gain, the sum of its squared impulse response). Not the
-median: on a quantised sensor (the JR3's 0.0122 N steps) the second differences lie on the
-step's grid, so the median of their squares is one of ``k²·step²`` (measured: 1.065 × the
-truth for every seed of the JR3 model), whereas a trimmed mean is continuous. The noise of a
-quantised sensor is its white noise plus ``step²/12`` (Sheppard), which this recovers. The floor
-is the noise's *white* part: a noise low-passed before it is sampled (gauge noise through the
-sensor's filter) has second differences far below ``6σ²`` (2 % of the truth through a 125 Hz
-2nd-order filter), and a per-trial offset (the JR3 model's 0.1 N after taring) has none at all.
+Noise floor (:mod:`.noise_floor`): the white force noise of each axis from the second
+differences of the raw force (a trimmed mean of their squares, so the triangle's corners do not
+count and a quantised sensor's grid does not bias it), through the band's zero-phase filter (its
+exact white-noise gain, the sum of its squared impulse response). A noise low-passed before it
+is sampled (gauge noise through the sensor's filter) has second differences far below ``6σ²``
+(2 % of the truth through a 125 Hz 2nd-order filter), so only the *white* part is read there.
 It is never taken below :data:`MIN_FLOOR` of the force's power: on noise-free data (level A)
 the gap is round-off, which no effect explains. The position sensor's white noise, read the same
 way from ``hand_pos``, adds its share through the nominal field (:attr:`CartSet.row_noise_var`,
-:mod:`.position_noise`).
+:mod:`.position_noise`), and so do per-trial force offsets (the F/T's residual tare, which a
+held-out trial cannot predict: read from the trial means of the nominal field's residual beyond
+a smooth function of the stop and time).
 """
 
 from __future__ import annotations
@@ -46,10 +42,15 @@ from pathlib import Path
 
 import numpy as np
 
-from armlab.dsp import butterworth, lowpass_zero_phase, zero_phase
+from armlab.dsp import lowpass_zero_phase
 from armlab.errors import DataError, EstimationError
 from armlab.estimation.sqrt_damping_fit import fit_sqrt_damping_field
 from armlab.models.cartesian_field import quadratic_basis
+from armlab.protocols.cartesian_online.diagnosis.noise_floor import (
+    band_noise_gain,
+    trial_offset_var,
+    white_noise_var,
+)
 from armlab.protocols.cartesian_online.diagnosis.position_noise import (
     differentiated_gain,
     smooth_velocity,
@@ -59,19 +60,13 @@ from armlab.protocols.cartesian_online.diagnosis.position_noise import (
 __all__ = [
     "AXES",
     "MIN_FLOOR",
-    "TRIMMED_CHI2_MEAN",
     "CartSet",
     "load_cart_trials",
     "prepare_cart",
-    "white_noise_var",
 ]
 
 AXES = ("x", "y")
 _REQUIRED = ("hand_pos", "ref_pos", "hand_force")
-_KEEP = 0.9  # share of the smallest squared second differences kept (the corners are < 1 %)
-#: mean of the smallest 90 % of a χ²₁ variable: E[Z²·1{Z² < q}] / 0.9 = P(χ²₃ < q) / 0.9 with
-#: q = 2.7055, χ²₁'s 90 % quantile (E[Z²·1{Z² < q}] = P(χ²₃ < q) for a standard normal Z)
-TRIMMED_CHI2_MEAN = 0.6230155
 _MAX_HAND_POS_M = 2.0  # m, the thesis's workspace lies within 1.2 m of its origin (Table 3.3)
 _MAX_HAND_VEL_M_S = 10.0  # m/s, beyond the fastest human reaching (~2-5 m/s): the unit is not m/s
 _MAX_HAND_FORCE_N = 2000.0  # N, ten times the JR3's rated 200 N: beyond, the unit is not N
@@ -126,25 +121,6 @@ def _case_rows(trials) -> np.ndarray:
     )
 
 
-def white_noise_var(z: np.ndarray, valid: np.ndarray) -> np.ndarray:
-    """(k,) N², white-noise variance per axis of (m, n, k) signals from the second differences of
-    their logged samples (module docstring: the trimmed mean of their squares over ``6·``
-    :data:`TRIMMED_CHI2_MEAN`)."""
-    d2 = np.diff(np.where(valid[..., None], z, np.nan), 2, axis=1)
-    d2 = np.sort(d2[np.all(np.isfinite(d2), axis=-1)] ** 2, axis=0)
-    kept = d2[: max(1, int(_KEEP * len(d2)))]
-    return kept.mean(axis=0) / (6.0 * TRIMMED_CHI2_MEAN)
-
-
-def _noise_gain(fs_hz: float, band_hz: float) -> float:
-    """Variance of white unit noise after the band's zero-phase low-pass (sum of h²)."""
-    n = 4001
-    impulse = np.zeros(n)
-    impulse[n // 2] = 1.0
-    h = zero_phase(butterworth(band_hz, fs_hz, 4), impulse, padtype="even")
-    return float(np.sum(h**2))
-
-
 @dataclass(frozen=True, eq=False)
 class CartSet:
     """One dataset's trials as one scoring set (the field is shared by every trial).
@@ -169,6 +145,9 @@ class CartSet:
             sequences by the protocol's estimator (D = δ√K, 12 + 2 parameters).
         noise_var: (2,) N², white force-noise variance per axis (raw rate).
         noise_gain: the band filter's white-noise variance gain.
+        offset_var: (2,) N², variance of the per-trial force offsets (the F/T's residual tare,
+            :func:`.noise_floor.trial_offset_var`; constant within a trial, so the band passes it
+            whole).
         pos_noise_var: (2,) m², white position-noise variance per axis (raw rate).
         vel_cutoff_hz: (2,) Hz, the velocity's smoothing cut-off per axis (``inf``: none; applied
             only below ``band_hz``).
@@ -196,6 +175,7 @@ class CartSet:
     delta0: np.ndarray
     noise_var: np.ndarray
     noise_gain: float
+    offset_var: np.ndarray
     pos_noise_var: np.ndarray
     vel_cutoff_hz: np.ndarray
     vel_gain: np.ndarray
@@ -245,11 +225,12 @@ class CartSet:
     def row_noise_var(self) -> np.ndarray:
         """N², band-limited noise variance of each row: the force's white noise, plus the position's
         through the nominal field, ``σ_e²·(K̂₀(q)²·g_band + δ₀²K̂₀(q)·g_v)`` (:mod:`.position_noise`;
-        the cross term is zero: one impulse response is even, the other odd)."""
+        the cross term is zero: one impulse response is even, the other odd), plus the per-trial
+        offsets' variance (:mod:`.noise_floor`)."""
         k = self.rows(np.maximum(quadratic_basis(self.q) @ self.k0.T, 0.0))  # (rows,) N/m, K̂₀ at q
         ax = self.row_axis
         eiv = self.pos_noise_var[ax] * (k**2 * self.noise_gain + self.delta0[ax] ** 2 * k * self.vel_gain[ax])
-        return self.noise_var[ax] * self.noise_gain + eiv
+        return self.noise_var[ax] * self.noise_gain + eiv + self.offset_var[ax]
 
 
 def _phase_labels(p: np.ndarray, valid: np.ndarray) -> np.ndarray:
@@ -337,6 +318,7 @@ def prepare_cart(trials, *, band_hz: float) -> CartSet:
     power = np.mean(force[valid] ** 2, axis=0)
     noise_var = np.maximum(white_noise_var(force, valid), MIN_FLOOR * power)
     phase = _phase_labels(p, valid)
+    u = _nominal_force(q, p, v, fits)
     names = tuple(f"seq {s} {ph}" for s, ph in zip(stop, phase, strict=True))
     return CartSet(
         fs_hz=fs,
@@ -346,7 +328,7 @@ def prepare_cart(trials, *, band_hz: float) -> CartSet:
         v=v,
         a=a,
         force=force,
-        u=_nominal_force(q, p, v, fits),
+        u=u,
         t=(t0 - t0.min())[:, None] + np.arange(n)[None, :] / fs,
         valid=valid,
         stop=stop,
@@ -357,7 +339,8 @@ def prepare_cart(trials, *, band_hz: float) -> CartSet:
         k0=np.array([f.k for f in fits]),
         delta0=np.array([f.delta for f in fits]),
         noise_var=noise_var,
-        noise_gain=_noise_gain(fs, band_hz),
+        noise_gain=band_noise_gain(fs, band_hz),
+        offset_var=trial_offset_var(force - u, valid, phase, (ref[:, 0] - centre) / radius, t0, noise_var),
         pos_noise_var=pos_noise_var,
         vel_cutoff_hz=vel_cutoff,
         vel_gain=np.array([differentiated_gain(fs, band_hz, float(fc)) for fc in vel_cutoff]),

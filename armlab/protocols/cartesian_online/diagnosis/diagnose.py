@@ -140,7 +140,10 @@ def diagnose_cart(trials, cfg: DiagnosisConfig) -> tuple[dict, dict]:
             "noise_source": "second differences of the raw force (white noise assumed), trimmed mean "
             "per axis, through the band's zero-phase filter; plus the position's white noise (the "
             "same estimator on hand_pos) through the nominal field, K^2 and delta^2 K times the "
-            "band's and the smoothed differentiator's gains",
+            "band's and the smoothed differentiator's gains; plus per-trial force offsets (the F/T's "
+            "residual tare: the trial means of the nominal residual less a smooth function of the "
+            "stop and time, per perturbation)",
+            "trial_offset_N": [float(x) for x in np.sqrt(cs.offset_var)],
             "velocity_cutoff_hz": [
                 float(f) if np.isfinite(f) and f < cfg.band_hz else None for f in cs.vel_cutoff_hz
             ],
