@@ -25,7 +25,10 @@ Two parts of it are read from the force (the position sensor's share: :mod:`.pos
   freedom, less the white noise's share of each mean (``σ²/n``). With the thesis's 20 stops that
   leaves 12 degrees of freedom per perturbation, 36 per axis; a bias common to all trials or a
   drift lies in the basis and leaves the estimate exactly as it was (tested), so it stays the
-  candidate ``force_sensor_drift``'s. Second differences of the means along the stops, tried
+  candidate ``force_sensor_drift``'s. Anything else that is constant within a trial and
+  changes at random from trial to trial is counted too (a subject's trial-to-trial change of
+  co-contraction shows partly so): it is as unpredictable on a held-out trial, and the report
+  gives its size (``gap.trial_offset_N``). Second differences of the means along the stops, tried
   first, do not cancel a field's second harmonic at 18° spacing, and read a common drift as
   ~0.1 N of offsets.
 """

@@ -95,6 +95,15 @@ def _how_far(r: Mapping[str, Any]) -> list[str]:
     return out
 
 
+def _offset_clause(gap: Mapping[str, Any]) -> str:
+    """The per-trial offsets read into the floor, where the file has them (results before
+    ``trial_offset_N`` existed have none)."""
+    sd = gap.get("trial_offset_N")
+    if not sd:
+        return ""
+    return "; per-trial force offsets of " + " / ".join(f"{x:.3g}" for x in sd) + " N rms (x / y)"
+
+
 def format_cart_report(results: Mapping[str, Any], *, data_path: str, figures: Sequence[str] = ()) -> str:
     """The Markdown report of a ``cartesian_online`` diagnosis (see docs/diagnosis_schema.md)."""
     r = results
@@ -106,8 +115,8 @@ def format_cart_report(results: Mapping[str, Any], *, data_path: str, figures: S
         f"sequences, sequences {sc.get('held_out_sequences', '?')} held out. Nominal simulation: the "
         "thesis's quadratic stiffness field with D = δ√K (Eqs. 2.2.1-2.2.4, 3.4.1; 12 + 2 parameters) "
         "calibrated on the other sequences. Gap = held-out residual power / measured force power "
-        "(1 − VAF); noise floor = the same ratio for the force sensor's white noise "
-        f"({r['gap']['noise_source']}).",
+        "(1 − VAF); noise floor = the same ratio for what no model can predict on a held-out trial "
+        f"({r['gap']['noise_source']}){_offset_clause(r['gap'])}.",
         "",
         verdict_paragraph(r, {**RULES, **(r.get("settings") or {})}),
         "",
