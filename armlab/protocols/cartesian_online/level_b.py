@@ -46,6 +46,7 @@ __all__ = [
     "clean_trials",
     "executed_path_trials",
     "inertia_compensated_trials",
+    "measured_cuff",
     "simulate_level_b_trials",
 ]
 
@@ -63,6 +64,29 @@ LEVEL_B_UNITS = {
 def _world_xy(rot: np.ndarray, f_site: np.ndarray) -> np.ndarray:
     """(..., 2) N: a site-frame force (..., 3) in the world's (= the thesis's) x, y."""
     return np.einsum("...ij,...j->...i", rot, f_site)[..., :2]
+
+
+def measured_cuff(
+    kin: RobotKinematics, robot_q: np.ndarray, ft_force: np.ndarray, fs_hz: float, rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """What the lab's sensors record of a level-B simulation: the LWR's encoders (0.01° steps)
+    through the robot's kinematics to the cuff, and the JR3 (noise, per-trial offset, drift,
+    125 Hz filter, 1 ms delay, 0.0122 N steps) saturating at :data:`JR3_RANGE_N`, turned into the
+    thesis's frame by the encoders' flange orientation (the realistic suite of the conditioning
+    lab, :meth:`SensorSuite.realistic`).
+
+    Args:
+        kin: the scene's robot kinematics; robot_q: (m, n, 7) rad and ft_force: (m, n, 3) N, the
+            simulated joint angles and F/T site force; rng: the sensors' only randomness.
+
+    Returns:
+        ``(hand_pos (m, n, 2) m, hand_force (m, n, 2) N, f_site (m, n, 3) N)``: the measured cuff
+        position and force in the thesis's x, y, and the F/T site reading after saturation.
+    """
+    measured = measure({"robot_q": robot_q, "ft_force": ft_force}, SensorSuite.realistic(), fs_hz, rng)
+    pos_meas, rot_meas = kin.forward(measured["robot_q"])
+    f_site = np.clip(measured["ft_force"], -JR3_RANGE_N, JR3_RANGE_N)
+    return pos_meas[..., :2], _world_xy(rot_meas, f_site), f_site
 
 
 def simulate_level_b_trials(
@@ -96,16 +120,10 @@ def simulate_level_b_trials(
     rng_sensors, rng_white = np.random.default_rng([cfg.seed, 2]).spawn(2)
     kin = RobotKinematics.from_scene(scene)
     pos_true, rot_true = kin.forward(sim.robot_q)
-    # the LWR's encoders and the JR3 (the conditioning lab's realistic suite), then its saturation
-    measured = measure(
-        {"robot_q": sim.robot_q, "ft_force": sim.ft_force}, SensorSuite.realistic(), fs, rng_sensors
-    )
-    pos_meas, rot_meas = kin.forward(measured["robot_q"])
-    f_site = np.clip(measured["ft_force"], -JR3_RANGE_N, JR3_RANGE_N)
+    hand_pos, force_meas, f_site = measured_cuff(kin, sim.robot_q, sim.ft_force, fs, rng_sensors)
     force_true = _world_xy(rot_true, sim.ft_force)
     extra = np.asarray(meta["noise_std_N"], float)[:, None, None]  # level A's white noise per case
-    force = _world_xy(rot_meas, f_site) + extra * rng_white.standard_normal(force_true.shape)
-    hand_pos = pos_meas[..., :2]
+    force = force_meas + extra * rng_white.standard_normal(force_true.shape)
     channels = dict(trials_a.channels)
     channels.update(
         hand_pos=hand_pos,
