@@ -295,6 +295,23 @@ def test_a_compliant_cuff_is_found_with_its_stiffness(tmp_path):
     assert abs(k_fit / k_true - 1.0) < 0.1
 
 
+def test_realistic_sensors_class_records_the_lab_sensors_and_names_the_hand(tmp_path):
+    # the evaluation seed's replicate 0 (a 1.89 kg hand, ENR 1.55): the referee's simulation
+    # recorded by the default lab's encoders and JR3, plus its white noise
+    cls = "realistic_sensors:payload_mass"
+    assert expected_verdict(cls, CART_CLASSES) == {"payload_mass"}
+    ds = make_cart_dataset(cls, 0, RefereeConfig(seed=1000), DiagnosisConfig(), tmp_path / "r")
+    cs = prepare_cart(load_cart_trials(ds.folder), band_hz=40.0)
+    # the LWR encoders' 0.01° steps at the cuff: measured 39 / 24 µm rms on the default run
+    # (docs/cartesian_online.md); the ideal classes' position noise is round-off
+    assert np.all((np.sqrt(cs.pos_noise_var) > 10e-6) & (np.sqrt(cs.pos_noise_var) < 100e-6))
+    # the JR3's 0.1 N per-trial offsets, read beside 0.3 N of white noise from 12 stops (12 degrees
+    # of freedom per axis: a factor 2 is over two standard errors of the sd either way)
+    assert np.all((np.sqrt(cs.offset_var) > 0.05) & (np.sqrt(cs.offset_var) < 0.2))
+    res, _ = diagnose_cart(load_cart_trials(ds.folder), DiagnosisConfig())
+    assert res["verdict"][0] == "payload_mass"
+
+
 @pytest.mark.slow
 def test_small_blind_benchmark_names_every_class(tmp_path):
     # one replicate of each class on the evaluation seed (~1 min on 2 cores: 8 of 9 right, the

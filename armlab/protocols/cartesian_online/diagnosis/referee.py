@@ -23,9 +23,15 @@ noise of ``referee.force_noise_N`` per axis. The hidden effects, at log-uniform 
   the 8 mm excursion ``d``, (8 mm / 0.1 m)³ = 5e-4 of the effect.
 
 Beside ``none`` and the five single effects: two pairs (the hand's inertia with an F/T offset; a
-compliant cuff with a non-quadratic field, both physical effects in one simulation) and a
+compliant cuff with a non-quadratic field, both physical effects in one simulation), a
 left-out class (a heavy hand with ``payload_mass`` excluded from the candidates: the right answer
-is ``unknown``).
+is ``unknown``) and ``realistic_sensors:payload_mass``: the hand's inertia recorded by the
+protocol's own realistic sensors instead of the ideal ones (the LWR's 0.01° encoders and the JR3
+with its per-trial offset, drift, 125 Hz filter, 1 ms delay and 0.0122 N steps,
+:func:`~armlab.protocols.cartesian_online.level_b.measured_cuff`), plus the same white noise. The
+right answer is ``payload_mass``: the sensors' imperfections are either floor (white noise, the
+offsets) or a lag that may follow it (``channel_delay``). Its ENR is the hand's unabsorbed force
+over everything the sensors add, in the band.
 
 Only ``hand_pos``, ``ref_pos``, ``hand_force`` and the trial_meta ``case``, ``stop``, ``n_logged``,
 ``t_start_s`` are written: the diagnoser never sees the truth.
@@ -80,7 +86,9 @@ CART_CLASSES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "payload_mass+force_sensor_drift": (("payload_mass", "force_sensor_drift"), ()),
     "cuff_compliance+non_quadratic_field": (("cuff_compliance", "non_quadratic_field"), ()),
     "left_out:payload_mass": (("payload_mass",), ("payload_mass",)),
+    "realistic_sensors:payload_mass": (("payload_mass",), ()),
 }
+_REALISTIC = "realistic_sensors:"  # a class recorded by the lab's realistic sensors (docstring)
 
 
 def describe(ref: RefereeConfig) -> str:
@@ -129,11 +137,19 @@ def _taylor_fields(field: QuadraticImpedanceField, extra: np.ndarray, stops: np.
     return out
 
 
-def _level_b(channels: dict, hand_kg: float, cuff_tc_s: float | None, fields: list | None):
-    """(cuff position (m, n, 2) m, F/T force (m, n, 2) N, measured cuff stiffness N/m or None)."""
+def _level_b(
+    channels: dict,
+    hand_kg: float,
+    cuff_tc_s: float | None,
+    fields: list | None,
+    sensor_rng: np.random.Generator | None = None,
+):
+    """(cuff position (m, n, 2) m, F/T force (m, n, 2) N, measured cuff stiffness N/m or None, and
+    with ``sensor_rng`` the same position and force through the lab's realistic sensors, else None)."""
     from armlab.config.schema import SimConfig
     from armlab.models.cartesian_hand_scene import build_hand_scene
     from armlab.models.robot_fk import RobotKinematics
+    from armlab.protocols.cartesian_online.level_b import measured_cuff
     from armlab.sim.cartesian_level_b import simulate_level_b
 
     scene = build_hand_scene(SimConfig(), hand_kg)
@@ -155,13 +171,15 @@ def _level_b(channels: dict, hand_kg: float, cuff_tc_s: float | None, fields: li
         st, so = np.unique(ref[g], axis=0, return_inverse=True)
         sim = simulate_level_b(scene, field, st, so.ravel(), pert[g], fs_hz=1000.0)
         hand[g], robot_q[g], ft[g] = sim.hand_pos, sim.robot_q, sim.ft_force
-    pos, rot = RobotKinematics.from_scene(scene).forward(robot_q)
+    kin = RobotKinematics.from_scene(scene)
+    pos, rot = kin.forward(robot_q)
     force = np.einsum("...ij,...j->...i", rot, ft)[..., :2]
     k_cuff = None
     if cuff_tc_s is not None:
         s = (pos[..., :2] - hand).ravel()
         k_cuff = float(np.dot(force.ravel(), s) / np.dot(s, s))
-    return pos[..., :2], force, k_cuff
+    measured = None if sensor_rng is None else measured_cuff(kin, robot_q, ft, 1000.0, sensor_rng)[:2]
+    return pos[..., :2], force, k_cuff, measured
 
 
 def make_cart_dataset(
@@ -190,7 +208,8 @@ def make_cart_dataset(
     stops = np.unique(channels["ref_pos"][:, 0], axis=0)
 
     nominal = _level_b(channels, NOMINAL_HAND_KG, None, None)
-    clean_pos, clean_force, _ = nominal
+    clean_pos, clean_force, _, _ = nominal
+    measured = None
     fields = None
     if "non_quadratic_field" in hidden:
         eps = params["non_quadratic_field"]["relative_amplitude"]
@@ -198,11 +217,12 @@ def make_cart_dataset(
         params["non_quadratic_field"]["cubic_N_per_m"] = extra.tolist()
         fields = _taylor_fields(THESIS_FIELD, extra, stops)
     if set(hidden) & {"payload_mass", "cuff_compliance", "non_quadratic_field"}:  # the physics' own
-        clean_pos, clean_force, k_cuff = _level_b(
+        clean_pos, clean_force, k_cuff, measured = _level_b(
             channels,
             params.get("payload_mass", {}).get("mass_kg", NOMINAL_HAND_KG),
             params.get("cuff_compliance", {}).get("time_constant_s"),
             fields,
+            rng.spawn(1)[0] if cls.startswith(_REALISTIC) else None,
         )
         if "cuff_compliance" in hidden:
             params["cuff_compliance"]["measured_stiffness_N_per_m"] = k_cuff
@@ -222,6 +242,10 @@ def make_cart_dataset(
         tt = np.arange(force.shape[1]) / 1000.0
         force = np.moveaxis(shift_columns(tt, moved, d).reshape(force.shape[1], force.shape[0], 2), 0, 1)
     noisy = force + ref.force_noise_N * rng.standard_normal(force.shape)
+    written_pos = clean_pos
+    if measured is not None:  # the lab's sensors record the same simulation (module docstring)
+        written_pos, recorded = measured
+        noisy = noisy + (recorded - clean_force)
 
     def trialset(pos, f):
         return TrialSet(
@@ -240,13 +264,17 @@ def make_cart_dataset(
 
     r_eff, y_eff = residual(clean_pos, force)
     r_nom, _ = residual(nominal[0], nominal[1])
-    _, y_noisy = residual(clean_pos, noisy)
-    noise_rms = float(np.sqrt(np.mean((y_noisy - y_eff) ** 2)))
+    if measured is None:
+        _, y_noisy = residual(clean_pos, noisy)
+        noise_rms = float(np.sqrt(np.mean((y_noisy - y_eff) ** 2)))
+    else:  # what the sensors change in the nominal's residual: the encoders' K·e too, not only the F/T's
+        r_meas, _ = residual(written_pos, noisy)
+        noise_rms = float(np.sqrt(np.mean((r_meas - r_eff) ** 2)))
     # with nothing hidden the effect's paths are the nominal's, so both are exactly 0
     unabsorbed = float(np.sqrt(np.mean((r_eff - r_nom) ** 2)))
     effect_rms = float(np.sqrt(np.mean((force - nominal[1]) ** 2)))
     folder.mkdir(parents=True, exist_ok=False)
-    write_trials(folder / "trials.h5", trialset(clean_pos, noisy))
+    write_trials(folder / "trials.h5", trialset(written_pos, noisy))
     truth = {
         "class": cls,
         "hidden": list(hidden),
