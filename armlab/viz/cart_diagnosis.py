@@ -28,10 +28,10 @@ _AXES = ("x", "y")
 
 
 def _per_trial(group: Mapping[str, Any], key: str) -> np.ndarray:
-    """Scoring rows -> (m, n, 2) N, NaN on the padding."""
+    """Scoring rows -> (m, n, 2) N, NaN where not scored (padding, edge guard)."""
     cs = group["set"]
-    out = np.full((*cs.valid.shape, 2), np.nan)
-    out[cs.valid] = np.asarray(group[key], float).reshape(-1, 2)
+    out = np.full((*cs.scored.shape, 2), np.nan)
+    out[cs.scored] = np.asarray(group[key], float).reshape(-1, 2)
     return out
 
 
@@ -118,9 +118,7 @@ def cart_diagnosis_recording(
     p = fresh_path(path, ".rrd")
     with recording(p, app_id) as rec:  # written under a temporary name, renamed when complete
         for i in range(cs.n_trials):
-            n = int(cs.valid[i].sum())
+            k = np.flatnonzero(cs.scored[i])
             held = f"held-out {cs.names[i]}: scored, not fitted" if cs.held_trials[i] else None
-            log_trial_stages(
-                rec, i, _AXES, np.arange(n) / cs.fs_hz, meas[i, :n], nom[i, :n], cor[i, :n], held
-            )
+            log_trial_stages(rec, i, _AXES, k / cs.fs_hz, meas[i, k], nom[i, k], cor[i, k], held)
     return p

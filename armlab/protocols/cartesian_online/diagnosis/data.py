@@ -13,8 +13,11 @@ Velocity is the file's ``hand_vel`` channel where it has one (level B writes the
 differences of its encoders' position; level A the generator's exact ``q̇_h``), else the central
 differences of ``hand_pos``. It is low-passed where the position's own noise outgrows the
 perturbation's spectrum below the band (:mod:`.position_noise`: the cut-off is read from the
-data). Acceleration is the central differences of that velocity. Scoring
-rows are every logged sample of every trial, both axes, after a zero-phase low-pass at ``band_hz``
+data). Acceleration is the central differences of that velocity. Where it is smoothed, the
+samples within the smoothed differentiator's response of a trial's ends are not scored (there the
+filter's edge extension, not the record, sets the velocity; :func:`.position_noise.
+edge_guard_samples`: 39 ms at a 25 Hz cut-off, none on ideal sensors). Scoring
+rows are the remaining logged samples of every trial, both axes, after a zero-phase low-pass at ``band_hz``
 (4th order forward-backward, the same filter on the force and on every model column, so a linear
 model stays linear). Whole sequences are held
 out: every third stop, starting with the second (the field is fitted on the others around the
@@ -53,6 +56,7 @@ from armlab.protocols.cartesian_online.diagnosis.noise_floor import (
 )
 from armlab.protocols.cartesian_online.diagnosis.position_noise import (
     differentiated_gain,
+    edge_guard_samples,
     smooth_velocity,
     snr_cutoff_hz,
 )
@@ -136,6 +140,10 @@ class CartSet:
             the output's own noise and "explain" it).
         t: (m, n) s, time of each sample from the first trial's start (drift basis).
         valid: (m, n) bool, logged samples (the padding of shorter trials excluded).
+        scored: (m, n) bool, the scoring rows' samples: the logged ones less ``edge_guard`` at
+            each end of a trial (:func:`.position_noise.edge_guard_samples`).
+        edge_guard: samples not scored at each end of a trial (0 unless the velocity is
+            smoothed).
         stop: (m,) int, the sequence (stop) of each trial, 0.. in time order.
         phase: (m,) str, the perturbation within its sequence: ``+x``, ``-y``, ``+x-y`` (from the
             measured excursion's axes and signs).
@@ -166,6 +174,8 @@ class CartSet:
     u: np.ndarray
     t: np.ndarray
     valid: np.ndarray
+    scored: np.ndarray
+    edge_guard: int
     stop: np.ndarray
     phase: np.ndarray
     held_trials: np.ndarray
@@ -190,8 +200,8 @@ class CartSet:
         return lowpass_zero_phase(z, self.fs_hz, self.band_hz, 4, axis=1, padtype="even")
 
     def rows(self, z: np.ndarray) -> np.ndarray:
-        """(m, n, 2, ...) -> (rows, ...): the logged samples, both axes, trial-major."""
-        return z[self.valid].reshape(-1, *z.shape[3:])
+        """(m, n, 2, ...) -> (rows, ...): the scored samples, both axes, trial-major."""
+        return z[self.scored].reshape(-1, *z.shape[3:])
 
     @cached_property
     def row_trial(self) -> np.ndarray:
@@ -252,6 +262,17 @@ def _nominal_force(q: np.ndarray, p: np.ndarray, v: np.ndarray, fits) -> np.ndar
     return k * p + np.array([f.delta for f in fits]) * root * v
 
 
+def _white_var(q, valid, fits, noise_var, pos_noise_var) -> np.ndarray:
+    """(m, 2) N², per trial, the white noise's variance per sample in the nominal's raw residual:
+    the force's, plus the position's through the fitted stiffness, ``mean(K̂(q)²)·σ_e²`` (the
+    damping column's share of a trial mean vanishes: a derivative of white noise averages to
+    its end values over the trial)."""
+    k = np.stack([np.maximum(quadratic_basis(q) @ f.k, 0.0) for f in fits], axis=-1)  # (m, n, 2) N/m
+    n = np.maximum(valid.sum(axis=1), 1)[:, None]
+    k2 = np.where(valid[..., None], k**2, 0.0).sum(axis=1) / n
+    return noise_var[None, :] + k2 * pos_noise_var[None, :]
+
+
 def prepare_cart(trials, *, band_hz: float) -> CartSet:
     """The scoring set of a ``cartesian_online`` trial file (module docstring).
 
@@ -284,6 +305,9 @@ def prepare_cart(trials, *, band_hz: float) -> CartSet:
     pos_noise_var = white_noise_var(q, valid)
     vel_cutoff = snr_cutoff_hz(p, valid, pos_noise_var, fs)
     v = smooth_velocity(v, fs, vel_cutoff, band_hz)
+    guard = min(edge_guard_samples(fs, vel_cutoff, band_hz), int(n_logged.min()) // 4)
+    j = np.arange(n)[None, :]
+    scored = valid & (j >= guard) & (j < n_logged[:, None] - guard)
     a = np.gradient(v, 1.0 / fs, axis=1)
     force = ch["hand_force"]
     # the sequence of each trial: its stop, or the distinct reference positions in time order
@@ -331,6 +355,8 @@ def prepare_cart(trials, *, band_hz: float) -> CartSet:
         u=u,
         t=(t0 - t0.min())[:, None] + np.arange(n)[None, :] / fs,
         valid=valid,
+        scored=scored,
+        edge_guard=guard,
         stop=stop,
         phase=phase,
         held_trials=held_trials,
@@ -340,7 +366,14 @@ def prepare_cart(trials, *, band_hz: float) -> CartSet:
         delta0=np.array([f.delta for f in fits]),
         noise_var=noise_var,
         noise_gain=band_noise_gain(fs, band_hz),
-        offset_var=trial_offset_var(force - u, valid, phase, (ref[:, 0] - centre) / radius, t0, noise_var),
+        offset_var=trial_offset_var(
+            force - u,
+            valid,
+            phase,
+            (ref[:, 0] - centre) / radius,
+            t0,
+            _white_var(q, valid, fits, noise_var, pos_noise_var),
+        ),
         pos_noise_var=pos_noise_var,
         vel_cutoff_hz=vel_cutoff,
         vel_gain=np.array([differentiated_gain(fs, band_hz, float(fc)) for fc in vel_cutoff]),

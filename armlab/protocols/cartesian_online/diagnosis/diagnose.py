@@ -32,9 +32,9 @@ def cart_candidates(cfg: DiagnosisConfig) -> list[str]:
 
 
 def _trial_major(cs: CartSet, rows: np.ndarray) -> np.ndarray:
-    """Scoring rows -> (m, n, 2), zero on the padding."""
-    out = np.zeros((*cs.valid.shape, 2))
-    out[cs.valid] = rows.reshape(-1, 2)
+    """Scoring rows -> (m, n, 2), zero where not scored (padding, edge guard)."""
+    out = np.zeros((*cs.scored.shape, 2))
+    out[cs.scored] = rows.reshape(-1, 2)
     return out
 
 
@@ -144,6 +144,7 @@ def diagnose_cart(trials, cfg: DiagnosisConfig) -> tuple[dict, dict]:
             "residual tare: the trial means of the nominal residual less a smooth function of the "
             "stop and time, per perturbation)",
             "trial_offset_N": [float(x) for x in np.sqrt(cs.offset_var)],
+            "edge_guard_ms": 1000.0 * cs.edge_guard / cs.fs_hz,
             "velocity_cutoff_hz": [
                 float(f) if np.isfinite(f) and f < cfg.band_hz else None for f in cs.vel_cutoff_hz
             ],

@@ -88,31 +88,38 @@ def trial_offset_var(
     phase: np.ndarray,
     stop_pos: np.ndarray,
     t_start: np.ndarray,
-    noise_var: np.ndarray,
+    white_var: np.ndarray,
 ) -> np.ndarray:
     """(k,) variance of per-trial offsets (module docstring), 0 where none shows or where too few
     trials are left over the smooth basis to tell.
 
     Args:
         resid: (m, n, k) a nominal model's residual, unfiltered.
-        valid: (m, n) logged samples.
+        valid: (m, n) logged samples (trials without any are left out).
         phase: (m,) the perturbation within its sequence (one regression per perturbation).
         stop_pos: (m, 2) the stop of each trial, scaled (about O(1) around the path).
         t_start: (m,) s, each trial's start.
-        noise_var: (k,) the white noise's variance per sample (its share of each trial mean,
-            ``noise_var / n_logged``, is subtracted).
+        white_var: (m, k) the white noise's variance per sample in each trial's residual (the
+            force's, and the position's through the field); its share of each trial mean,
+            ``white_var / n``, is subtracted as the least-squares residual keeps it.
     """
     n = valid.sum(axis=1)
-    means = np.where(valid[..., None], resid, 0.0).sum(axis=1) / n[:, None]  # (m, k)
-    rss, dof = np.zeros(resid.shape[-1]), 0
-    for ph in dict.fromkeys(phase):
-        idx = np.flatnonzero(phase == ph)
+    kept = n > 0
+    means = np.where(valid[..., None], resid, 0.0).sum(axis=1) / np.maximum(n, 1)[:, None]  # (m, k)
+    share = white_var / np.maximum(n, 1)[:, None]  # (m, k) the white noise's variance of each mean
+    rss, white, dof = np.zeros(resid.shape[-1]), np.zeros(resid.shape[-1]), 0
+    for ph in dict.fromkeys(phase[kept]):
+        idx = np.flatnonzero(kept & (phase == ph))
         basis = _smooth_basis(stop_pos[idx], t_start[idx])
-        coef, _, rank, _ = np.linalg.lstsq(basis, means[idx], rcond=1e-9)
-        if len(idx) > rank:
-            rss += np.sum((means[idx] - basis @ coef) ** 2, axis=0)
-            dof += len(idx) - int(rank)
+        u, sv, _ = np.linalg.svd(basis, full_matrices=False)
+        rank = int(np.sum(sv > 1e-9 * sv[0]))
+        if len(idx) <= rank:
+            continue
+        u = u[:, :rank]
+        e = means[idx] - u @ (u.T @ means[idx])  # residual of the least-squares fit on the basis
+        rss += np.sum(e**2, axis=0)
+        white += (1.0 - np.sum(u**2, axis=1)) @ share[idx]  # E[RSS] of the white part: Σ(1 - h_ii)·w_i
+        dof += len(idx) - rank
     if dof == 0:
         return np.zeros(resid.shape[-1])
-    white = np.mean(noise_var[None, :] / n[:, None], axis=0)  # the white noise's share of a mean
-    return np.maximum(rss / dof - white, 0.0)
+    return np.maximum((rss - white) / dof, 0.0)

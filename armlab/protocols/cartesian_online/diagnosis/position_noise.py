@@ -50,8 +50,10 @@ import numpy as np
 from armlab.dsp import butterworth, lowpass_zero_phase, zero_phase
 
 __all__ = [
+    "EDGE_ENERGY",
     "SNR_CROSSING",
     "differentiated_gain",
+    "edge_guard_samples",
     "smooth_velocity",
     "snr_cutoff_hz",
 ]
@@ -61,6 +63,8 @@ __all__ = [
 SNR_CROSSING = 2.0
 _ORDER = 4  # one-way Butterworth order of the smoothing low-pass (the band's, data.band)
 _IMPULSE_N = 4001  # samples of the impulse responses whose squared sums give the gains
+#: share of the smoothed differentiator's impulse-response energy the edge guard spans
+EDGE_ENERGY = 0.99
 
 
 def snr_cutoff_hz(p: np.ndarray, valid: np.ndarray, noise_var: np.ndarray, fs_hz: float) -> np.ndarray:
@@ -109,3 +113,26 @@ def differentiated_gain(fs_hz: float, band_hz: float, cutoff_hz: float) -> float
         h = zero_phase(butterworth(cutoff_hz, fs_hz, _ORDER), h, padtype="even")
     h = zero_phase(butterworth(band_hz, fs_hz, 4), h, padtype="even")
     return float(np.sum(h**2))
+
+
+def edge_guard_samples(fs_hz: float, cutoff_hz: np.ndarray, band_hz: float) -> int:
+    """Samples at each end of a trial that are not scored where the velocity is smoothed: the
+    half-width of the smoothed differentiator's impulse response (the acceleration column's
+    filter: smoothing ∘ central difference) that holds :data:`EDGE_ENERGY` of its energy, at the
+    lowest cut-off below the band; 0 where nothing is smoothed.
+
+    Within it of a trial's ends the smoothing's even extension stands in for samples the record
+    does not have, so the smoothed velocity and its derivative there are not the hand's: on the
+    thesis's triangles the record ends while the hand is still decelerating, and the missing end
+    of ``m·a`` left ~40 % of what the hand's inertia did not explain in the last 20 ms (default
+    lab). The scoring band's own filter, shared by the force and every column, needs no guard.
+    """
+    smoothed = [float(fc) for fc in cutoff_hz if fc < band_hz]
+    if not smoothed:
+        return 0
+    impulse = np.zeros(_IMPULSE_N)
+    impulse[_IMPULSE_N // 2] = 1.0
+    h = np.gradient(zero_phase(butterworth(min(smoothed), fs_hz, _ORDER), impulse, padtype="even"))
+    energy = h**2
+    outside = 2.0 * np.cumsum(energy[::-1])[::-1][_IMPULSE_N // 2 + 1 :]  # beyond ±k, k = 0, 1, ...
+    return int(np.argmax(outside < (1.0 - EDGE_ENERGY) * energy.sum()))

@@ -247,7 +247,7 @@ def make_cart_dataset(
         written_pos, recorded = measured
         noisy = noisy + (recorded - clean_force)
 
-    def trialset(pos, f):
+    def trial_set(pos, f):
         return TrialSet(
             fs_hz=1000.0,
             onset_index=np.ones(len(f), dtype=int),
@@ -257,10 +257,15 @@ def make_cart_dataset(
             attrs={"protocol": "cartesian_online", "level": "B"},
         )
 
-    def residual(pos, f):
-        cs = prepare_cart(trialset(pos, f), band_hz=diag.band_hz)
+    def residual(pos, f, trial_major=False):
+        cs = prepare_cart(trial_set(pos, f), band_hz=diag.band_hz)
         x = cart_columns(cs, (), {})
-        return cs.y - x @ np.linalg.lstsq(x, cs.y, rcond=None)[0], cs.y
+        r = cs.y - x @ np.linalg.lstsq(x, cs.y, rcond=None)[0]
+        if trial_major:  # (m, n, 2), NaN where not scored (the measured set's edge guard differs)
+            out = np.full((*cs.scored.shape, 2), np.nan)
+            out[cs.scored] = r.reshape(-1, 2)
+            return out, cs.y
+        return r, cs.y
 
     r_eff, y_eff = residual(clean_pos, force)
     r_nom, _ = residual(nominal[0], nominal[1])
@@ -268,13 +273,13 @@ def make_cart_dataset(
         _, y_noisy = residual(clean_pos, noisy)
         noise_rms = float(np.sqrt(np.mean((y_noisy - y_eff) ** 2)))
     else:  # what the sensors change in the nominal's residual: the encoders' K·e too, not only the F/T's
-        r_meas, _ = residual(written_pos, noisy)
-        noise_rms = float(np.sqrt(np.mean((r_meas - r_eff) ** 2)))
+        change = residual(written_pos, noisy, True)[0] - residual(clean_pos, force, True)[0]
+        noise_rms = float(np.sqrt(np.nanmean(change**2)))
     # with nothing hidden the effect's paths are the nominal's, so both are exactly 0
     unabsorbed = float(np.sqrt(np.mean((r_eff - r_nom) ** 2)))
     effect_rms = float(np.sqrt(np.mean((force - nominal[1]) ** 2)))
     folder.mkdir(parents=True, exist_ok=False)
-    write_trials(folder / "trials.h5", trialset(written_pos, noisy))
+    write_trials(folder / "trials.h5", trial_set(written_pos, noisy))
     truth = {
         "class": cls,
         "hidden": list(hidden),
