@@ -152,13 +152,17 @@ def _default_lab_exp4(seed: int) -> TrialSet:
 def test_the_default_lab_is_diagnosed_as_the_hand_inertia_the_thesis_neglects(seed):
     # the default lab differs from the thesis's model by the hand's inertia and by its sensors; the
     # sensors' white noise, the encoders' noise and the JR3's per-trial tare offset (0.1 N) are the
-    # floor, so the verdict is the hand (before the offsets were counted: unknown, 0.64-0.72 of the
-    # excess explained). Measured on seeds 0-2: payload_mass, 0.75-0.79 kg (the JR3's lag and the
-    # smoothed velocity read the 0.966 kg hand low), offsets 0.09-0.13 N per axis (0.1 N true)
+    # floor, and the trials' ends, where the smoothed velocity is the filter's, are not scored, so
+    # the verdict is the hand (before: unknown, 0.64-0.79 of the excess explained). Measured on
+    # seeds 0-2: payload_mass, 0.82-0.83 kg (the JR3's lag against m·a's lead reads the 0.966 kg
+    # hand low), offsets 0.088-0.128 N per axis
     res, _ = diagnose_cart(_default_lab_exp4(seed), DiagnosisConfig())
-    assert res["verdict"] == ["payload_mass"]
+    # first, and a whole explanation (a second name may follow: the JR3's lag is a real delay,
+    # named on 1 of seeds 0-9)
+    assert res["verdict"][0] == "payload_mass" and not res["partial"]
     assert 0.6 < res["how_far"][-1]["parameters"]["payload_mass.mass_kg"] < 1.1
-    # 60 trials, 36 degrees of freedom per axis: within a factor 1.5 of the JR3 model's 0.1 N
+    # 60 trials, 36 degrees of freedom per axis (~12 % standard error on the sd): within a factor
+    # 1.5 of the JR3 model's 0.1 N, over three standard errors
     assert all(0.067 < s < 0.15 for s in res["gap"]["trial_offset_N"])
 
 
