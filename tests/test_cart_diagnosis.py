@@ -24,6 +24,7 @@ from armlab.protocols.cartesian_online.diagnosis.data import MIN_FLOOR, load_car
 from armlab.protocols.cartesian_online.diagnosis.diagnose import cart_candidates, diagnose_cart
 from armlab.protocols.cartesian_online.diagnosis.models import cubic_basis
 from armlab.protocols.cartesian_online.diagnosis.noise_floor import white_noise_var
+from armlab.protocols.cartesian_online.diagnosis.position_noise import edge_guard_samples
 from armlab.protocols.cartesian_online.diagnosis.referee import (
     _CENTRE,
     _RADIUS,
@@ -135,6 +136,29 @@ def test_per_trial_force_offsets_are_read_into_the_floor_and_a_common_bias_is_no
     # a bias common to all trials is still the candidate's: named as before
     res, _ = diagnose_cart(_with_force(ts, force + common), DiagnosisConfig())
     assert res["verdict"] == ["force_sensor_drift"]
+
+
+def test_edge_guard_is_the_smoothed_differentiators_response_and_none_on_ideal_sensors():
+    # the half-width holding 99 % of the smoothing ∘ central difference's energy: 39 samples at a
+    # 25 Hz cut-off (0.9918 of it inside ±39, 0.9897 inside ±38), shorter at higher cut-offs
+    assert edge_guard_samples(1000.0, np.array([25.0, np.inf]), 40.0) == 39
+    assert edge_guard_samples(1000.0, np.array([32.5, 25.0]), 40.0) == 39  # the lowest smoothed axis
+    assert edge_guard_samples(1000.0, np.array([32.5, np.inf]), 40.0) < 39
+    assert edge_guard_samples(1000.0, np.array([40.0, np.inf]), 40.0) == 0  # nothing smoothed
+    # ideal sensors (the thesis's generator with white force noise): every logged sample scored
+    cs = prepare_cart(_level_a(NOISE_N), band_hz=40.0)
+    assert cs.edge_guard == 0 and np.array_equal(cs.scored, cs.valid)
+    # smoothed (the quantised hand): the first and last guard samples of each trial are not scored
+    q = prepare_cart(_quantised_hand(0)[0], band_hz=40.0)
+    g = q.edge_guard
+    assert g > 0 and not q.scored[:, :g].any() and not q.scored[:, -g:].any() and q.scored[:, g:-g].all()
+
+
+def test_too_short_trials_are_refused_by_name():
+    ts = _level_a(NOISE_N)
+    meta = {**ts.trial_meta, "n_logged": np.where(np.arange(len(ts.trial_meta["n_logged"])) == 3, 0, 400)}
+    with pytest.raises(DataError, match=r"n_logged.*trials \[3\] have \[0\]"):
+        prepare_cart(dataclasses.replace(ts, trial_meta=meta), band_hz=40.0)
 
 
 def _default_lab_exp4(seed: int) -> TrialSet:
@@ -301,7 +325,7 @@ def test_a_compliant_cuff_is_found_with_its_stiffness(tmp_path):
 
 
 def test_realistic_sensors_class_records_the_lab_sensors_and_names_the_hand(tmp_path):
-    # the evaluation seed's replicate 0 (a 1.89 kg hand, ENR 1.55): the referee's simulation
+    # the evaluation seed's replicate 0 (a 1.89 kg hand, ENR 1.63): the referee's simulation
     # recorded by the default lab's encoders and JR3, plus its white noise
     cls = "realistic_sensors:payload_mass"
     assert expected_verdict(cls, CART_CLASSES) == {"payload_mass"}
@@ -319,8 +343,8 @@ def test_realistic_sensors_class_records_the_lab_sensors_and_names_the_hand(tmp_
 
 @pytest.mark.slow
 def test_small_blind_benchmark_names_every_class(tmp_path):
-    # one replicate of each class on the evaluation seed (~1 min on 2 cores: 8 of 9 right, the
-    # left-out class named channel_delay; 7 of the 8 ENR >= 1 + none cases, 88 %); the
+    # one replicate of each class on the evaluation seed (~1 min on 2 cores: 9 of 10 right, the
+    # left-out class named channel_delay; 8 of the 9 ENR >= 1 + none cases, 89 %); the
     # 10-replicate run and its confusion matrix are in docs/cartesian_online.md
     from armlab.runner.diagnose import run_benchmark
 
@@ -390,5 +414,7 @@ def test_quantised_position_hand_inertia_is_named_with_its_mass():
     res, _ = diagnose_cart(ts, DiagnosisConfig())
     assert res["verdict"] == ["payload_mass"]
     mass = res["how_far"][-1]["parameters"]["payload_mass.mass_kg"]
-    # measured 1.0017 kg: 2 % allows the noise's share of the acceleration column
-    assert abs(mass - _HAND_KG) < 0.02 * _HAND_KG
+    # measured 1.0275 kg (seeds 0-4: 1.007-1.046; 1.0017 before the 30 ms edge guard, which leaves
+    # out the start corner's acceleration and most of the record's cut end): 5 % allows the
+    # noise's share of the acceleration column over those seeds' spread
+    assert abs(mass - _HAND_KG) < 0.05 * _HAND_KG

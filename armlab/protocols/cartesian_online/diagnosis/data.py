@@ -75,6 +75,9 @@ _MAX_HAND_POS_M = 2.0  # m, the thesis's workspace lies within 1.2 m of its orig
 _MAX_HAND_VEL_M_S = 10.0  # m/s, beyond the fastest human reaching (~2-5 m/s): the unit is not m/s
 _MAX_HAND_FORCE_N = 2000.0  # N, ten times the JR3's rated 200 N: beyond, the unit is not N
 _HELD_EVERY = 3  # every third sequence is held out
+#: fewest logged samples a trial may have: a tenth of the thesis's 0.4 s perturbation at 1 kHz
+#: (the differences, the periodogram and the edge guard need a stretch of samples)
+_MIN_LOGGED = 40
 #: the smallest noise variance, as a fraction of the force's mean square per axis: the 12 + 2 fit's
 #: round-off on noise-free data (level A: gap ~1e-12 with the exact velocity) stays below it, and
 #: the JR3's 0.0122 N steps alone (0.0035 N rms) are 3e-8 of a 20 N rms force
@@ -263,10 +266,12 @@ def _nominal_force(q: np.ndarray, p: np.ndarray, v: np.ndarray, fits) -> np.ndar
 
 
 def _white_var(q, valid, fits, noise_var, pos_noise_var) -> np.ndarray:
-    """(m, 2) N², per trial, the white noise's variance per sample in the nominal's raw residual:
-    the force's, plus the position's through the fitted stiffness, ``mean(K̂(q)²)·σ_e²`` (the
-    damping column's share of a trial mean vanishes: a derivative of white noise averages to
-    its end values over the trial)."""
+    """(m, 2) N², per trial, the white noise's variance per sample in the nominal's raw residual,
+    as far as its trial mean goes: the force's, plus the position's through the fitted stiffness,
+    ``mean(K̂(q)²)·σ_e²``. The damping column's share is left out (a derivative of noise averages
+    to its end values over a trial, but the smoothed one's are correlated: 23-33 % of the
+    stiffness term on the thesis's field at a 25 Hz cut-off, measured), so the offsets read ~3 %
+    high in variance on the default lab."""
     k = np.stack([np.maximum(quadratic_basis(q) @ f.k, 0.0) for f in fits], axis=-1)  # (m, n, 2) N/m
     n = np.maximum(valid.sum(axis=1), 1)[:, None]
     k2 = np.where(valid[..., None], k**2, 0.0).sum(axis=1) / n
@@ -293,7 +298,13 @@ def prepare_cart(trials, *, band_hz: float) -> CartSet:
     ch = {k: np.asarray(trials.channels[k], float)[rows] for k in _REQUIRED}
     meta = {k: np.asarray(v)[rows] for k, v in trials.trial_meta.items()}
     m, n, _ = ch["hand_pos"].shape
-    n_logged = meta.get("n_logged", np.full(m, n)).astype(int)
+    n_logged = np.minimum(meta.get("n_logged", np.full(m, n)).astype(int), n)  # at most the stored
+    short = np.flatnonzero(n_logged < _MIN_LOGGED)
+    if short.size:
+        raise DataError(
+            f"trial_meta 'n_logged' must be at least {_MIN_LOGGED} samples for every trial; trials "
+            f"{short[:5].tolist()} have {n_logged[short[:5]].tolist()}"
+        )
     valid = np.arange(n)[None, :] < n_logged[:, None]
     q = ch["hand_pos"]
     ref = ch["ref_pos"]

@@ -71,13 +71,16 @@ def _breakdowns(cs: CartSet, y: np.ndarray, resid: np.ndarray) -> dict:
 
 
 def _residual_tests(cs: CartSet, resid: np.ndarray, max_lag_s: float = 0.05) -> dict:
-    """Whiteness of the held-out residual and its cross-correlation with the hand velocity."""
+    """Whiteness of the held-out residual and its cross-correlation with the hand velocity, over
+    the scored samples (zero elsewhere: the padding and the edge guard)."""
     r = _trial_major(cs, resid)[cs.held_trials]
     v = cs.band(cs.v)[cs.held_trials]
+    mask = np.broadcast_to(cs.scored[cs.held_trials][..., None], r.shape)
     n = r.shape[1]
     lags = np.arange(int(round(max_lag_s * cs.fs_hz)) + 1)
-    r0 = r - r.mean(axis=1, keepdims=True)
-    v0 = v - v.mean(axis=1, keepdims=True)
+    count = np.maximum(mask.sum(axis=1, keepdims=True), 1)
+    r0 = np.where(mask, r - np.where(mask, r, 0.0).sum(axis=1, keepdims=True) / count, 0.0)
+    v0 = np.where(mask, v - np.where(mask, v, 0.0).sum(axis=1, keepdims=True) / count, 0.0)
     denom_r = np.sum(r0**2)
     acf = np.array([np.sum(r0[:, k:] * r0[:, : n - k]) / denom_r for k in lags])
     xcf = np.array([np.sum(r0[:, k:] * v0[:, : n - k]) for k in lags]) / np.sqrt(denom_r * np.sum(v0**2))
@@ -86,7 +89,7 @@ def _residual_tests(cs: CartSet, resid: np.ndarray, max_lag_s: float = 0.05) -> 
         "lags_s": (lags / cs.fs_hz).tolist(),
         "autocorrelation": acf.tolist(),
         "cross_correlation_velocity": xcf.tolist(),
-        "bound_95": float(1.96 / np.sqrt(r0.size)),
+        "bound_95": float(1.96 / np.sqrt(mask.sum())),
         "max_cross_correlation": float(xcf[k_max]),
         "max_cross_correlation_lag_s": float(lags[k_max] / cs.fs_hz),
     }
@@ -130,7 +133,7 @@ def diagnose_cart(trials, cfg: DiagnosisConfig) -> tuple[dict, dict]:
     )
     stages = [_stage(cs, y, m, floor) for m in sel.stages]
     metric = (
-        "held-out residual power / measured force power, every logged sample, both axes, "
+        "held-out residual power / measured force power, every scored sample, both axes, "
         f"0-{cfg.band_hz:g} Hz (1 - VAF)"
     )
     results = {

@@ -22,9 +22,11 @@ Two parts of it are read from the force (the position sensor's share: :mod:`.pos
   trials, a drift over the run), so the means are fitted by least squares on the cubic monomials
   of the stop's position (on a circle: the angle's harmonics up to the third) and a linear trend
   in time, and the offsets' variance is the residual variance over the residual degrees of
-  freedom, less the white noise's share of each mean (``σ²/n``). With the thesis's 20 stops that
-  leaves 12 degrees of freedom per perturbation, 36 per axis; a bias common to all trials or a
-  drift lies in the basis and leaves the estimate exactly as it was (tested), so it stays the
+  freedom, less the white noise's share of each mean (``σ_i²/n_i`` per trial, the force's and the
+  position's through the field, weighted by the fit's leverages as the residual keeps it). With
+  the thesis's 20 stops on the circle that leaves 12 degrees of freedom per perturbation, 36 per
+  axis; a bias common to all trials or a drift lies in the basis and leaves the estimate where it
+  was (3e-7 relative, round-off of the nominal fit it moves; tested), so it stays the
   candidate ``force_sensor_drift``'s. Anything else that is constant within a trial and
   changes at random from trial to trial is counted too (a subject's trial-to-trial change of
   co-contraction shows partly so): it is as unpredictable on a held-out trial, and the report
@@ -95,7 +97,7 @@ def trial_offset_var(
 
     Args:
         resid: (m, n, k) a nominal model's residual, unfiltered.
-        valid: (m, n) logged samples (trials without any are left out).
+        valid: (m, n) logged samples (a trial without any is left out).
         phase: (m,) the perturbation within its sequence (one regression per perturbation).
         stop_pos: (m, 2) the stop of each trial, scaled (about O(1) around the path).
         t_start: (m,) s, each trial's start.
