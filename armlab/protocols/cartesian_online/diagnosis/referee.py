@@ -216,7 +216,8 @@ def make_cart_dataset(
         extra = eps * THESIS_FIELD.stiffness(_CENTRE)[:, None] * _cubic_form(rng)  # (2, 4) N/m
         params["non_quadratic_field"]["cubic_N_per_m"] = extra.tolist()
         fields = _taylor_fields(THESIS_FIELD, extra, stops)
-    if set(hidden) & {"payload_mass", "cuff_compliance", "non_quadratic_field"}:  # the physics' own
+    physical = set(hidden) & {"payload_mass", "cuff_compliance", "non_quadratic_field"}
+    if physical or cls.startswith(_REALISTIC):  # the physics' own, or recorded by the lab's sensors
         clean_pos, clean_force, k_cuff, measured = _level_b(
             channels,
             params.get("payload_mass", {}).get("mass_kg", NOMINAL_HAND_KG),
