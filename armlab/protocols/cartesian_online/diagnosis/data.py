@@ -258,23 +258,22 @@ def _phase_labels(p: np.ndarray, valid: np.ndarray) -> np.ndarray:
     return np.array(out)
 
 
-def _nominal_force(q: np.ndarray, p: np.ndarray, v: np.ndarray, fits) -> np.ndarray:
-    """(m, n, 2) N: the fitted field's force ``K(q)·p + δ√K(q)·v`` at the measured states."""
-    k = np.stack([quadratic_basis(q) @ f.k for f in fits], axis=-1)
+def _nominal_force(k: np.ndarray, p: np.ndarray, v: np.ndarray, fits) -> np.ndarray:
+    """(m, n, 2) N: the fitted field's force ``K(q)·p + δ√K(q)·v`` at the measured states, with
+    ``k`` = K̂(q) (m, n, 2) N/m."""
     root = np.sqrt(np.maximum(k, 0.0))
     return k * p + np.array([f.delta for f in fits]) * root * v
 
 
-def _white_var(q, valid, fits, noise_var, pos_noise_var) -> np.ndarray:
+def _white_var(k, valid, noise_var, pos_noise_var) -> np.ndarray:
     """(m, 2) N², per trial, the white noise's variance per sample in the nominal's raw residual,
     as far as its trial mean goes: the force's, plus the position's through the fitted stiffness,
     ``mean(K̂(q)²)·σ_e²``. The damping column's share is left out (a derivative of noise averages
     to its end values over a trial, but the smoothed one's are correlated: 23-33 % of the
     stiffness term on the thesis's field at a 25 Hz cut-off, measured), so the offsets read ~3 %
-    high in variance on the default lab."""
-    k = np.stack([np.maximum(quadratic_basis(q) @ f.k, 0.0) for f in fits], axis=-1)  # (m, n, 2) N/m
+    high in variance on the default lab. ``k``: (m, n, 2) N/m, the fitted stiffness K̂(q)."""
     n = np.maximum(valid.sum(axis=1), 1)[:, None]
-    k2 = np.where(valid[..., None], k**2, 0.0).sum(axis=1) / n
+    k2 = np.where(valid[..., None], np.maximum(k, 0.0) ** 2, 0.0).sum(axis=1) / n
     return noise_var[None, :] + k2 * pos_noise_var[None, :]
 
 
@@ -353,7 +352,8 @@ def prepare_cart(trials, *, band_hz: float) -> CartSet:
     power = np.mean(force[valid] ** 2, axis=0)
     noise_var = np.maximum(white_noise_var(force, valid), MIN_FLOOR * power)
     phase = _phase_labels(p, valid)
-    u = _nominal_force(q, p, v, fits)
+    k_hat = np.stack([quadratic_basis(q) @ f.k for f in fits], axis=-1)  # (m, n, 2) N/m, K̂(q)
+    u = _nominal_force(k_hat, p, v, fits)
     names = tuple(f"seq {s} {ph}" for s, ph in zip(stop, phase, strict=True))
     return CartSet(
         fs_hz=fs,
@@ -383,7 +383,7 @@ def prepare_cart(trials, *, band_hz: float) -> CartSet:
             phase,
             (ref[:, 0] - centre) / radius,
             t0,
-            _white_var(q, valid, fits, noise_var, pos_noise_var),
+            _white_var(k_hat, valid, noise_var, pos_noise_var),
         ),
         pos_noise_var=pos_noise_var,
         vel_cutoff_hz=vel_cutoff,

@@ -258,23 +258,26 @@ def make_cart_dataset(
             attrs={"protocol": "cartesian_online", "level": "B"},
         )
 
-    def residual(pos, f, trial_major=False):
+    def residual(pos, f):
+        """(the nominal's residual on the scoring rows, the band-limited force, the scored mask)"""
         cs = prepare_cart(trial_set(pos, f), band_hz=diag.band_hz)
         x = cart_columns(cs, (), {})
-        r = cs.y - x @ np.linalg.lstsq(x, cs.y, rcond=None)[0]
-        if trial_major:  # (m, n, 2), NaN where not scored (the measured set's edge guard differs)
-            out = np.full((*cs.scored.shape, 2), np.nan)
-            out[cs.scored] = r.reshape(-1, 2)
-            return out, cs.y
-        return r, cs.y
+        return cs.y - x @ np.linalg.lstsq(x, cs.y, rcond=None)[0], cs.y, cs.scored
 
-    r_eff, y_eff = residual(clean_pos, force)
-    r_nom, _ = residual(nominal[0], nominal[1])
+    def trial_major(r, scored):
+        """Rows -> (m, n, 2), NaN where not scored (the measured set's edge guard differs)."""
+        out = np.full((*scored.shape, 2), np.nan)
+        out[scored] = r.reshape(-1, 2)
+        return out
+
+    r_eff, y_eff, scored_eff = residual(clean_pos, force)
+    r_nom = residual(nominal[0], nominal[1])[0]
     if measured is None:
-        _, y_noisy = residual(clean_pos, noisy)
+        y_noisy = residual(clean_pos, noisy)[1]
         noise_rms = float(np.sqrt(np.mean((y_noisy - y_eff) ** 2)))
     else:  # what the sensors change in the nominal's residual: the encoders' K·e too, not only the F/T's
-        change = residual(written_pos, noisy, True)[0] - residual(clean_pos, force, True)[0]
+        r_meas, _, scored_meas = residual(written_pos, noisy)
+        change = trial_major(r_meas, scored_meas) - trial_major(r_eff, scored_eff)
         noise_rms = float(np.sqrt(np.nanmean(change**2)))
     # with nothing hidden the effect's paths are the nominal's, so both are exactly 0
     unabsorbed = float(np.sqrt(np.mean((r_eff - r_nom) ** 2)))
