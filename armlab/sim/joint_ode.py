@@ -18,8 +18,10 @@ the controller knows) at the servo's bandwidth; r is the reference's cubic splin
 pedal; the first referee records the opposite): the transmission spring's torque, or with a rigid
 transmission τm − Jm·θ̈m. With no effects it is exactly (Ip + I)·θ̈ + B·θ̇ + K·θ of the encoder
 angle: the nominal of the diagnosis holds on clean data to the integration tolerance. A second-
-order sensor (``SensorDynamics``) filters it as two more states of the ODE; the channel delay
-samples it ``channel_delay_s`` before the position (dense output: any fraction of a sample).
+order sensor (``SensorDynamics``) filters it: it feeds nothing back, so its input is sampled
+from the dense output at 4x the recorded rate and filtered exactly between samples (first-order
+hold); the channel delay samples it ``channel_delay_s`` before the position (dense output: any
+fraction of a sample).
 
 **Reflex** (closed loop through the servo's finite stiffness and any compliance): the excitation
 G·max(dir·θ̇_limb(t − d), 0) drives the activation a (rise τ_act, decay τ_deact) and the force f
@@ -39,7 +41,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy import integrate, interpolate
+from scipy import integrate, interpolate, signal
 
 from armlab.errors import ConfigError, DataError
 from armlab.sim.joint_ode_effects import OdeEffects, drift_signal, slow_signal
@@ -54,6 +56,12 @@ __all__ = [
 _RTOL = 1e-8  # 1, relative tolerance (clean torque vs the nominal of the sampled angle: < 1e-4, tests)
 _ATOL = 1e-11  # absolute tolerance (rad, rad/s, N·m: every state)
 _CHUNK_S = 1.0  # s, integration chunk without a reflex (bounds the dense outputs kept)
+# the sensor's input is sampled this many times per recorded sample and filtered exactly between
+# them (first-order hold): a linear sensor acts on nothing else, and as two ODE states its
+# natural frequency (up to kHz: a fast sensor is a few µs of delay in the band) made RK45's steps
+# shrink to its period (over 15 min a dataset); the hold's error on the in-band torque is of
+# order (2π·40 Hz / (4·500 Hz))²/12 = 3e-5 of it
+_SENSOR_OVERSAMPLING = 4
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -142,7 +150,6 @@ class _Plant:
         self.jm = servo.motor_inertia_kgm2
         names = [f"q{d}" for d in range(self.ndof)] + [f"w{d}" for d in range(self.ndof)]
         names += ["z"] * (fx.friction is not None) + ["a", "f"] * (fx.reflex is not None)
-        names += ["s", "sd"] * (fx.sensor is not None)
         self.idx = {k: i for i, k in enumerate(names)}
         self.n_states = len(names)
         m, v = fx.modulation, fx.voluntary
@@ -225,11 +232,6 @@ class _Plant:
             a = x[:, i["a"]]
             dx[:, i["a"]] = (e - a) / np.where(e > a, r.tau_act_s, r.tau_deact_s)
             dx[:, i["f"]] = (a - x[:, i["f"]]) / r.tau_contraction_s
-        if fx.sensor is not None:
-            wn = 2 * np.pi * fx.sensor.natural_hz
-            dx[:, i["s"]] = x[:, i["sd"]]
-            zeta = fx.sensor.damping_ratio
-            dx[:, i["sd"]] = wn**2 * (sensor_in - x[:, i["s"]]) - 2 * zeta * wn * x[:, i["sd"]]
         return dx.ravel()
 
     def rest(self) -> np.ndarray:
@@ -242,8 +244,6 @@ class _Plant:
             e[:, d] = 1e-3  # rad; exact: the forces are affine in q at rest
             jac[:, :, d] = (self.forces(0.0, e)[0] * self.J - f0) / 1e-3
         x0[:, : self.ndof] = np.linalg.solve(jac, -f0[..., None])[..., 0]
-        if self.fx.sensor is not None:
-            x0[:, self.idx["s"]] = self.forces(0.0, x0)[1]
         return x0
 
 
@@ -273,6 +273,16 @@ def _integrate(plant: _Plant, t_pos: np.ndarray, t_tq: np.ndarray) -> tuple[np.n
     states = out.reshape(times.size, rows, plant.n_states).transpose(1, 0, 2)
     pick = lambda ts: states[:, np.searchsorted(times, ts)]  # noqa: E731
     return pick(t_pos), pick(t_tq)
+
+
+def _sensor_output(u: np.ndarray, sensor, fs: float) -> np.ndarray:
+    """(rows, m) the 2nd-order sensor's output for its input ``u`` sampled at ``fs``, at rest on
+    ``u``'s first value: the exact response to the input interpolated linearly between samples
+    (first-order hold; :func:`scipy.signal.cont2discrete`)."""
+    wn = 2 * np.pi * sensor.natural_hz
+    num, den, _ = signal.cont2discrete(([wn**2], [1.0, 2 * sensor.damping_ratio * wn, wn**2]), 1.0 / fs, "foh")
+    u0 = u[:, :1]
+    return signal.lfilter(np.ravel(num), den, u - u0, axis=1) + u0
 
 
 def simulate_joint_ode(
@@ -312,10 +322,11 @@ def simulate_joint_ode(
     rows, n = ref.shape
     t = np.arange(n) / fs_hz
     plant = _Plant(ref, fs_hz, joint, servo, effects, rng)
-    x_pos, x_tq = _integrate(plant, t, t - effects.channel_delay_s)
-    t_tq = np.broadcast_to(t - effects.channel_delay_s, (rows, n))
-    acc, sensor_in = plant.forces(np.maximum(t_tq, 0.0)[0], x_tq)
-    clean = x_tq[..., plant.idx["s"]] if effects.sensor is not None else sensor_in
+    over = _SENSOR_OVERSAMPLING if effects.sensor is not None else 1
+    t_in = np.arange(n * over) / (over * fs_hz) - effects.channel_delay_s  # the sensor's input times
+    x_pos, x_in = _integrate(plant, t, t_in)
+    _, sensor_in = plant.forces(np.maximum(t_in, 0.0), x_in)
+    clean = sensor_in if effects.sensor is None else _sensor_output(sensor_in, effects.sensor, over * fs_hz)[:, ::over]
     acc_pos = plant.forces(t, x_pos)[0][..., plant.dm]
     drift = np.zeros((rows, n))
     if effects.drift is not None:
