@@ -158,7 +158,9 @@ def lowpassed(z: np.ndarray, cutoff_hz: float) -> np.ndarray:
     return signal.lfilter(b, a, z - z[0]) + z[0]
 
 
-def compliant_torque(x: np.ndarray, *, k: float, c: float = 0.0, I=JOINT_I, B=JOINT_B, K=JOINT_K) -> np.ndarray:
+def compliant_torque(
+    x: np.ndarray, *, k: float, c: float = 0.0, I=JOINT_I, B=JOINT_B, K=JOINT_K
+) -> np.ndarray:
     """N·m, the joint Z = I·s² + B·s + K behind a series spring k and damper c (N·m·s/rad).
 
     Undamped: -k·Z/(Z + k) applied to x. Damped: the limb angle θ_l = (c·s + k)/(Z + c·s + k)·x,

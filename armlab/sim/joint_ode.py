@@ -280,7 +280,9 @@ def _sensor_output(u: np.ndarray, sensor, fs: float) -> np.ndarray:
     ``u``'s first value: the exact response to the input interpolated linearly between samples
     (first-order hold; :func:`scipy.signal.cont2discrete`)."""
     wn = 2 * np.pi * sensor.natural_hz
-    num, den, _ = signal.cont2discrete(([wn**2], [1.0, 2 * sensor.damping_ratio * wn, wn**2]), 1.0 / fs, "foh")
+    num, den, _ = signal.cont2discrete(
+        ([wn**2], [1.0, 2 * sensor.damping_ratio * wn, wn**2]), 1.0 / fs, "foh"
+    )
     u0 = u[:, :1]
     return signal.lfilter(np.ravel(num), den, u - u0, axis=1) + u0
 
@@ -326,7 +328,11 @@ def simulate_joint_ode(
     t_in = np.arange(n * over) / (over * fs_hz) - effects.channel_delay_s  # the sensor's input times
     x_pos, x_in = _integrate(plant, t, t_in)
     _, sensor_in = plant.forces(np.maximum(t_in, 0.0), x_in)
-    clean = sensor_in if effects.sensor is None else _sensor_output(sensor_in, effects.sensor, over * fs_hz)[:, ::over]
+    clean = (
+        sensor_in
+        if effects.sensor is None
+        else _sensor_output(sensor_in, effects.sensor, over * fs_hz)[:, ::over]
+    )
     acc_pos = plant.forces(t, x_pos)[0][..., plant.dm]
     drift = np.zeros((rows, n))
     if effects.drift is not None:

@@ -30,10 +30,8 @@ from __future__ import annotations
 from functools import lru_cache
 
 import numpy as np
-from scipy import signal
 
 from armlab.diagnosis.families import ModelFamily, NLParam, Surrogate, lowpass2, sensor_lowpass, shift_columns
-from armlab.dsp import bilinear
 from armlab.protocols.joint_1dof.diagnosis.data import PreparedTrial
 from armlab.protocols.joint_1dof.diagnosis.local import local_gains, local_level
 from armlab.protocols.joint_1dof.diagnosis.position_sensor import (
