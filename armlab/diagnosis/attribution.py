@@ -7,7 +7,7 @@ Scores (all on the held-out parts, in the scoring band):
 - ``delta_bic`` = ``n_eff·ln(RSS_c / RSS_0) + Δp·ln(n_eff)`` against the current model, with
   ``n_eff`` the held-out samples times the band's share of the Nyquist band (the residual is
   band-limited, so neighbouring samples are not independent) and Δp the added parameters (the
-  linear ones once per trial).
+  linear ones once per trial; a surrogate's ``counts_as`` where it re-parametrises the nominal).
 
 A candidate is accepted when ``delta_bic < -bic_margin``, its reduction is at least
 ``min_step_fraction`` of the nominal excess and ``min_floor_fraction`` of the floor; the first one
@@ -218,7 +218,8 @@ def select_effects(
                         continue
                     fm = fits[name].result()
                     gap, rss, _ = held_out_gap(fm, trials, y_band)
-                    dp = fm.n_params - current.n_params
+                    counted = candidates[name].counts_as
+                    dp = fm.n_params - current.n_params if counted is None else counted
                     dbic = delta_bic(rss, rss_c, dp, n_eff)
                     entries.append(_entry(name, gap_c, gap, dbic, dp, excess0, fm))
                     progress.advance()

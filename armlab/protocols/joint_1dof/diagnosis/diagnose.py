@@ -35,6 +35,7 @@ from armlab.protocols.joint_1dof.diagnosis.data import (
 from armlab.protocols.joint_1dof.diagnosis.derivative_floor import derivative_floor
 from armlab.protocols.joint_1dof.diagnosis.low_band import low_band_check
 from armlab.protocols.joint_1dof.diagnosis.models import (
+    ANY_RATE_HZ,
     JOINT_FAMILY,
     JOINT_SURROGATES,
     JOINT_TV_FAMILY,
@@ -195,10 +196,13 @@ def _operating_point(
 
 def _check_rate(names: list[str], fs_fit: float, fs_raw: float) -> None:
     """DataError if a candidate searches a frequency (a ``*_hz`` parameter) at or beyond the
-    fitting rate's Nyquist frequency: its filter cannot be built there (e.g. 100 Hz data against
-    the sensor-bandwidth candidate's cut-offs up to 110 Hz)."""
+    fitting rate's Nyquist frequency: its digital filter cannot be built there (e.g. 40 Hz data
+    against the reflex's low-pass up to 25 Hz). Frequencies applied as an exact frequency
+    response (:data:`ANY_RATE_HZ`: the torque sensor's) may lie anywhere."""
     for name in names:
         for p in JOINT_SURROGATES[name].params:
+            if f"{name}.{p.name}" in ANY_RATE_HZ:
+                continue
             if p.name.endswith("_hz") and not p.upper < fs_fit / 2:
                 raise DataError(
                     f"data sampled at {fs_raw:g} Hz are fitted at {fs_fit:g} Hz, whose Nyquist frequency "

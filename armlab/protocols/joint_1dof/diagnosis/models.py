@@ -32,7 +32,14 @@ from functools import lru_cache
 import numpy as np
 from scipy import signal
 
-from armlab.diagnosis.families import ModelFamily, NLParam, Surrogate, lowpass2, sensor_lowpass, shift_columns
+from armlab.diagnosis.families import (
+    ModelFamily,
+    NLParam,
+    Surrogate,
+    lowpass2,
+    sensor_response,
+    shift_columns,
+)
 from armlab.dsp import bilinear
 from armlab.protocols.joint_1dof.diagnosis.data import PreparedTrial
 from armlab.protocols.joint_1dof.diagnosis.local import local_gains, local_level
@@ -44,6 +51,7 @@ from armlab.protocols.joint_1dof.diagnosis.position_sensor import (
 )
 
 __all__ = [
+    "ANY_RATE_HZ",
     "JOINT_FAMILY",
     "JOINT_SURROGATES",
     "JOINT_TV_FAMILY",
@@ -187,7 +195,8 @@ def _columns(
     if "channel_delay" in names:
         phi = shift_columns(tr.t_s, phi, theta["channel_delay.delay_s"])
     if "force_sensor_bandwidth" in names:
-        phi = sensor_lowpass(phi, theta["force_sensor_bandwidth.cutoff_hz"], tr.fs_hz, axis=0)
+        fsb = "force_sensor_bandwidth"
+        phi = sensor_response(phi, theta[f"{fsb}.natural_hz"], theta[f"{fsb}.damping_ratio"], tr.fs_hz)
     return phi
 
 
@@ -223,8 +232,12 @@ JOINT_SURROGATES: dict[str, Surrogate] = {
             ),
             ("gain",),
         ),
-        Surrogate("cuff_compliance", "intrinsic", _COMPLIANCE_PARAMS, ("pedal_inertia",)),
-        Surrogate("transmission_compliance", "intrinsic", _COMPLIANCE_PARAMS),
+        # the compliances replace I, B, K of each trial by a gain and I/K, B/K shared by the trials:
+        # 2-3 fewer free parameters than the nominal (with 4 trials), a restriction of the nominal
+        # that is not the effect; counted as what they add: the spring's ratio, and for the cuff the
+        # split of the inertia between the pedal (rigid, on the sensor's side) and the limb
+        Surrogate("cuff_compliance", "intrinsic", _COMPLIANCE_PARAMS, ("pedal_inertia",), counts_as=2),
+        Surrogate("transmission_compliance", "intrinsic", _COMPLIANCE_PARAMS, counts_as=1),
         Surrogate(
             "joint_friction",
             "additive",
@@ -234,10 +247,19 @@ JOINT_SURROGATES: dict[str, Surrogate] = {
             ),
             ("coulomb",),
         ),
+        # the torque sensor's own dynamics, a continuous 2nd-order response (not a digital filter at
+        # the fitting rate, whose cut-off stops below its Nyquist frequency): strain-gauge sensors
+        # and their electronics reach from tens of Hz to kHz, and their damping is not always a
+        # Butterworth's 0.707 (a lightly damped load cell rings; an over-damped stage lags)
         Surrogate(
             "force_sensor_bandwidth",
             "output",
-            (NLParam("cutoff_hz", 2.0, 110.0, (5.0, 10.0, 20.0, 40.0, 80.0), log=True),),
+            (
+                # Hz: up to 100 kHz, a lag 2ζ/w of a few µs (above a few hundred Hz only the lag
+                # is seen in band: the response's f² gain term is an inertia the nominal takes up)
+                NLParam("natural_hz", 2.0, 1e5, tuple(5.0 * 2.0**j for j in range(14)), log=True),
+                NLParam("damping_ratio", 0.3, 1.5, (0.707,), log=True),
+            ),
         ),
         Surrogate(
             "channel_delay",
@@ -263,6 +285,11 @@ JOINT_SURROGATES: dict[str, Surrogate] = {
         Surrogate("payload_mass", "absorbed"),
     )
 }
+
+
+#: Frequencies applied as an exact continuous frequency response, not by a digital filter at the
+#: fitting rate: they may lie at or above its Nyquist frequency.
+ANY_RATE_HZ = frozenset({"force_sensor_bandwidth.natural_hz"})
 
 
 def _linear_names(model: tuple[Surrogate, ...], op: bool = False) -> tuple[str, ...]:
