@@ -233,9 +233,10 @@ JOINT_SURROGATES: dict[str, Surrogate] = {
             ("gain",),
         ),
         # the compliances replace I, B, K of each trial by a gain and I/K, B/K shared by the trials:
-        # 2-3 fewer free parameters than the nominal (with 4 trials), a restriction of the nominal
-        # that is not the effect; counted as what they add: the spring's ratio, and for the cuff the
-        # split of the inertia between the pedal (rigid, on the sensor's side) and the limb
+        # fewer free parameters than the nominal (with 4 trials: the cuff 1, the transmission 5), a
+        # restriction of the nominal that is not the effect; counted as what they add: the spring's
+        # ratio, and for the cuff the split of the inertia between the pedal (rigid, on the
+        # sensor's side) and the limb
         Surrogate("cuff_compliance", "intrinsic", _COMPLIANCE_PARAMS, ("pedal_inertia",), counts_as=2),
         Surrogate("transmission_compliance", "intrinsic", _COMPLIANCE_PARAMS, counts_as=1),
         Surrogate(
