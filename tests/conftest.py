@@ -158,10 +158,23 @@ def lowpassed(z: np.ndarray, cutoff_hz: float) -> np.ndarray:
     return signal.lfilter(b, a, z - z[0]) + z[0]
 
 
-def compliant_torque(x: np.ndarray, *, k: float, I=JOINT_I, B=JOINT_B, K=JOINT_K) -> np.ndarray:
-    """N·m, the joint Z = I·s² + B·s + K behind a series spring k: -k·Z/(Z + k) applied to x."""
-    b, a = signal.bilinear([k * I, k * B, k * K], [I, B, K + k], JOINT_FS_HZ)
-    return -(signal.lfilter(b, a, x - x[0]) + k * K / (K + k) * x[0])
+def compliant_torque(
+    x: np.ndarray, *, k: float, c: float = 0.0, I=JOINT_I, B=JOINT_B, K=JOINT_K
+) -> np.ndarray:
+    """N·m, the joint Z = I·s² + B·s + K behind a series spring k and damper c (N·m·s/rad).
+
+    Undamped: -k·Z/(Z + k) applied to x. Damped: the limb angle θ_l = (c·s + k)/(Z + c·s + k)·x,
+    then the spring's torque -(k·(x - θ_l) + c·(ẋ - θ̇_l)) (a computation of its own, not the
+    diagnosis' surrogate's polynomial division).
+    """
+    if c == 0.0:
+        b, a = signal.bilinear([k * I, k * B, k * K], [I, B, K + k], JOINT_FS_HZ)
+        return -(signal.lfilter(b, a, x - x[0]) + k * K / (K + k) * x[0])
+    b, a = signal.bilinear([c, k], [I, B + c, K + k], JOINT_FS_HZ)
+    limb = signal.lfilter(b, a, x - x[0]) + k / (K + k) * x[0]
+    v, _ = joint_derivatives(x)
+    v_limb, _ = joint_derivatives(limb)
+    return -(k * (x - limb) + c * (v - v_limb))
 
 
 def slow_activation(rng, n: int, *, depth: float, bandwidth_hz: float = 0.2) -> np.ndarray:

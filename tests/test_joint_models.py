@@ -248,6 +248,19 @@ def test_compliance_recovers_the_stiffness_ratio(name):
     assert held_out_gap(fm, trials, y_band)[0] < 0.1 * held_out_gap(nominal, trials, y_band)[0]
 
 
+@pytest.mark.parametrize("name", ["transmission_compliance", "cuff_compliance"])
+def test_damped_compliance_recovers_its_damping_ratio(name):
+    # a soft-tissue interface: spring 4x the joint's stiffness, damping ratio 0.25 of the mode it
+    # makes with the limb (c = 2·0.25·sqrt(k·I))
+    k, zeta = 4.0 * JOINT_K, 0.25
+    c = 2.0 * zeta * np.sqrt(k * JOINT_I)
+    trials, y_band, nominal, fm = _fit(lambda x: compliant_torque(x, k=k, c=c), [name])
+    # ±30 % as for the spring (the tolerance for a compliance's parameters)
+    assert fm.theta[f"{name}.damping_ratio"] == pytest.approx(zeta, rel=0.3)
+    assert fm.theta[f"{name}.ratio"] == pytest.approx(4.0, rel=0.3)
+    assert held_out_gap(fm, trials, y_band)[0] < 0.1 * held_out_gap(nominal, trials, y_band)[0]
+
+
 def test_cocontraction_recovers_the_stiffness_and_damping_slopes():
     rng = np.random.default_rng(4)
     x = prbs_position(rng, 12.0, highpass_hz=1.0)  # no sub-Hz motion in the slow torque
