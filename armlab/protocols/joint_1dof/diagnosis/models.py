@@ -12,7 +12,7 @@ it in the tests):
   voluntary torque);
 - **intrinsic** replacement of ``[θ̈, θ̇, θ]`` by a series-compliance response
   (``cuff_compliance``: the pedal's own inertia stays rigid on the sensor side;
-  ``transmission_compliance``: everything beyond the spring);
+  ``transmission_compliance``: everything beyond the spring; :mod:`.compliance`);
 - **output** transforms of every column (``channel_delay``, ``force_sensor_bandwidth``);
 - **position** errors: ``[θ̈, θ̇, θ]`` of the recorded angle through a Wiener smoother
   (``encoder_quantisation`` on a recording whose angle lies on a grid, ``position_sensor_noise``
@@ -38,6 +38,11 @@ from armlab.diagnosis.families import (
     lowpass2,
     sensor_response,
     shift_columns,
+)
+from armlab.protocols.joint_1dof.diagnosis.compliance import (
+    COMPLIANCE_PARAMS,
+    compliance_torque,
+    start_compliance,
 )
 from armlab.protocols.joint_1dof.diagnosis.data import PreparedTrial
 from armlab.protocols.joint_1dof.diagnosis.local import local_gains, local_level
@@ -80,38 +85,6 @@ def _friction(v: np.ndarray, velocity: float, release_s: float, fs: float) -> np
     return out
 
 
-#: s, the recorded angle's end values held on both sides before the compliance's spectral filter
-#: (the interface mode rings for ~1/(ζ·ω) <= 0.1 s at ζ >= 0.003 and 500 Hz: it stays in the pad)
-_COMPLIANCE_PAD_S = 0.25
-
-
-def _compliance(tr: PreparedTrial, tau2: float, tau1: float, ratio: float, zeta: float) -> np.ndarray:
-    """Torque (per unit K) of a joint Z' = tau2·s² + tau1·s + 1 behind a damped series spring.
-
-    The spring is ``S = ratio·(1 + tc·s)``: a real interface dissipates (soft tissue and a strap, a
-    cable and its pulleys), sized by the damping ratio ``zeta`` of the mode it makes with what lies
-    beyond it, ``tc = c/k = 2·zeta·sqrt(I/k) = 2·zeta·sqrt(tau2/ratio)``. The torque
-    ``S·Z'/(Z' + S)`` is written ``Z' − Z'²/(Z' + S)``: the joint's own ``Z'`` from the trial's
-    derivative columns (those of the nominal, so a stiff spring nests the nominal exactly) less the
-    spring's correction, which is computed in the frequency domain at the recorded rate (exact at
-    every frequency of the record), then band-limited and decimated like the torque.
-
-    A time-domain discretisation misplaces that correction: the interface mode lies near or
-    above the recorded rate's Nyquist frequency (a 90 kN·m/rad cable on a 0.03 kg·m² ankle rings
-    at 275 Hz, recorded at 500-2000 Hz), where a bilinear map warps it by tens of percent; its
-    error then matched the in-band correction itself, and a transmission fitted that way lost
-    to the cuff (whose extra inertia column soaks up the error) on the ODE referee's datasets.
-    """
-    tc = 2.0 * zeta * np.sqrt(tau2 / ratio)
-    x = tr.x_raw
-    pad = int(_COMPLIANCE_PAD_S * tr.raw_fs_hz) + 8
-    z = np.concatenate([np.full(pad, x[0]), x, np.full(pad, x[-1])])
-    s = 2j * np.pi * np.fft.rfftfreq(z.size, 1.0 / tr.raw_fs_hz)
-    zp = (tau2 * s + tau1) * s + 1.0
-    correction = np.fft.irfft(zp * zp / (zp + ratio * (1.0 + tc * s)) * np.fft.rfft(z), z.size)
-    return tau2 * tr.a + tau1 * tr.v + tr.x - tr.to_fit_rate(correction[pad : pad + x.size])
-
-
 @lru_cache(maxsize=64)  # 6 trials x the delays in flight (the grid's 23, a few refinements)
 def _delayed_velocity(tr: PreparedTrial, delay_s: float) -> np.ndarray:
     """The trial's velocity delayed by ``delay_s`` (a spectral shift), remembered (read-only): the
@@ -140,7 +113,7 @@ def _effect_column(tr: PreparedTrial, name: str, values: tuple[float, ...]) -> n
     elif name == "local":
         out = _local_columns(tr)
     else:  # a compliance: (tau2, tau1, ratio, zeta)
-        out = _compliance(tr, *values)
+        out = compliance_torque(tr, *values)
     out.flags.writeable = False
     return out
 
@@ -219,25 +192,6 @@ def _columns(
     return phi
 
 
-def _ratio_grid() -> tuple[float, ...]:
-    # factor 2 up to 512, then factor 4: above, the spring's share of the band's torque is small
-    # and changes slowly with the ratio (the refinement takes it from there)
-    return (1.0, 2.0, 4.0, 8.0, 16.0, 32.0, 64.0, 128.0, 256.0, 512.0, 2048.0, 8192.0, 32768.0)
-
-
-_COMPLIANCE_PARAMS = (
-    NLParam("tau2_s2", 1e-6, 1e-2, (), log=True),  # I/K, s²: from the nominal fit
-    NLParam("tau1_s", 1e-4, 0.2, (), log=True),  # B/K, s: from the nominal fit
-    # interface or cable stiffness / K: cuffs 1.5-50 kN·m/rad and capstan cables 8-150 kN·m/rad
-    # (the first referee's ranges) over ankle K of 50-200 N·m/rad reach a few thousand, over a
-    # relaxed elbow's 5-40 N·m/rad (Bennett et al. 1992) 30 000
-    NLParam("ratio", 0.2, 1.0e5, _ratio_grid(), log=True),
-    # the interface mode's damping ratio: light structures (cables, couplings) ~0.02-0.1, soft
-    # tissue under a cuff or strap ~0.1-0.3 (the grip's 178 N·s/m on 15 kN/m at ~1.5 kg of hand
-    # and forearm, de Vlugt et al. 2003, is 0.6); started at 0.05 and refined
-    NLParam("damping_ratio", 0.003, 1.0, (), log=True),
-)
-
 #: The joint_1dof candidates, by catalogue name.
 JOINT_SURROGATES: dict[str, Surrogate] = {
     s.name: s
@@ -263,8 +217,8 @@ JOINT_SURROGATES: dict[str, Surrogate] = {
         # restriction of the nominal that is not the effect; counted as what they add: the spring's
         # ratio and damping, and for the cuff the split of the inertia between the pedal (rigid, on
         # the sensor's side) and the limb
-        Surrogate("cuff_compliance", "intrinsic", _COMPLIANCE_PARAMS, ("pedal_inertia",), counts_as=3),
-        Surrogate("transmission_compliance", "intrinsic", _COMPLIANCE_PARAMS, counts_as=2),
+        Surrogate("cuff_compliance", "intrinsic", COMPLIANCE_PARAMS, ("pedal_inertia",), counts_as=3),
+        Surrogate("transmission_compliance", "intrinsic", COMPLIANCE_PARAMS, counts_as=2),
         Surrogate(
             "joint_friction",
             "additive",
@@ -335,20 +289,8 @@ def _linear_names(model: tuple[Surrogate, ...], op: bool = False) -> tuple[str, 
     return tuple(base)
 
 
-_START_ZETA = 0.05  # 1, the compliance's starting damping ratio (light structure; refined from there)
-
-
-def _start_compliance(theta, name, base_beta):
-    i, b, k = (np.mean([bb[j] for bb in base_beta]) for j in range(3))
-    if k == 0 or not np.isfinite(k):
-        k = 1.0
-    theta.setdefault(f"{name}.tau2_s2", float(np.clip(abs(i / k), 2e-6, 5e-3)))
-    theta.setdefault(f"{name}.tau1_s", float(np.clip(abs(b / k), 2e-4, 0.1)))
-    theta.setdefault(f"{name}.damping_ratio", _START_ZETA)
-
-
 #: The 1-DoF joint protocol's model family.
-JOINT_FAMILY = ModelFamily(columns=_columns, linear_names=_linear_names, start=_start_compliance)
+JOINT_FAMILY = ModelFamily(columns=_columns, linear_names=_linear_names, start=start_compliance)
 
 #: The linear parameters a time-varying recording's nominal adds: K(p) = K + k1 p + k2 p² and
 #: B(p) = B + b1 p + b2 p², p the operating angle less its mean (rad), in N·m/rad per rad^j and
@@ -365,5 +307,5 @@ OP_LINEAR_NAMES = (
 JOINT_TV_FAMILY = ModelFamily(
     columns=lambda tr, model, theta: _columns(tr, model, theta, op=True),
     linear_names=lambda model: _linear_names(model, op=True),
-    start=_start_compliance,
+    start=start_compliance,
 )
