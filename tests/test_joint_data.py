@@ -276,3 +276,22 @@ def test_noise_floor_from_groups_of_repeats_of_different_lengths():
     # 6 s + 10 s scored: 3 sampling sd of the pooled estimate
     assert floor.variance_Nm2 == pytest.approx(expected, rel=3 * np.sqrt(var_per_s / 16.0))
     assert floor.psd.shape == floor.f_hz.shape
+
+
+def test_only_digital_filters_limit_the_recorded_rate():
+    """The torque sensor's natural frequency (up to 100 kHz) is applied as an exact frequency
+    response, so 100 Hz data are diagnosed with every candidate; the reflex's digital low-pass
+    (up to 25 Hz) still needs a fitting rate above 50 Hz, and the error names it."""
+    from armlab.protocols.joint_1dof.diagnosis.diagnose import _check_rate, candidate_names
+    from armlab.protocols.joint_1dof.diagnosis.models import ANY_RATE_HZ, JOINT_SURROGATES
+
+    names = candidate_names(DiagnosisConfig())
+    assert "force_sensor_bandwidth" in names
+    # every exempt frequency is a parameter of a candidate (a rename cannot leave it stale)
+    assert all(
+        any(f"{n}.{p.name}" == key for n, s in JOINT_SURROGATES.items() for p in s.params)
+        for key in ANY_RATE_HZ
+    )
+    _check_rate(names, 100.0, 100.0)
+    with pytest.raises(DataError, match="'reflex'"):
+        _check_rate(names, 40.0, 40.0)

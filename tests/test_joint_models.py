@@ -216,7 +216,7 @@ def test_force_sensor_bandwidth_recovers_the_cutoff():
 
 def test_force_sensor_bandwidth_reaches_a_fast_ringing_sensor():
     # a 300 Hz sensor of damping 0.5, above the 125 Hz Nyquist frequency of the fitting rate: in
-    # band a 0.5 ms lag and a gain that rises by (2ζ² - 1)(f/300)², which a digital filter at
+    # band a 0.5 ms lag and a gain that rises by (1 - 2ζ²)(f/300)², which a digital filter at
     # 250 Hz cannot represent; the data are its exact (first-order-hold) response at 1 kHz
     wn, zeta = 2 * np.pi * 300.0, 0.5
     num, den, _ = signal.cont2discrete(([wn**2], [1.0, 2 * zeta * wn, wn**2]), 1.0 / JOINT_FS_HZ, "foh")
@@ -227,8 +227,8 @@ def test_force_sensor_bandwidth_reaches_a_fast_ringing_sensor():
 
     # 0.005 N·m of noise: the 0.5 ms lag's torque is ~0.03 N·m, under conftest's 0.05 N·m default
     trials, y_band, nominal, fm = _fit(sensed, ["force_sensor_bandwidth"], noise_std=0.005)
-    # in band the response is a lag 2ζ/w plus a real f² gain term; that term times the stiffness
-    # is an inertia (-(1 - 2ζ²)K/w² · s²), which the nominal's own inertia takes up, so only the
+    # in band the response is a lag 2ζ/w plus a real f² term (1 - 4ζ²)(f/f_n)²; that term times
+    # the stiffness is an inertia (-(1 - 4ζ²)K/w² · s²), which the nominal's own takes up, so only the
     # lag is identified here (natural frequency and damping trade along it): ±5 %
     zeta_fit, fn_fit = (fm.theta[f"force_sensor_bandwidth.{k}"] for k in ("damping_ratio", "natural_hz"))
     lag = 2 * zeta_fit / (2 * np.pi * fn_fit)
