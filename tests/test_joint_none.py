@@ -107,16 +107,21 @@ def test_derivatives_are_fourth_order_at_the_ends():
 
 
 def test_the_derivative_floor_appears_only_where_the_data_favour_another_estimator():
-    """Exact derivatives: the five-point ones are the closest, no derivative floor (below 1 % of
-    the noise floor); numpy.gradient's torque: the floor is the gap the choice leaves (the
-    nominal's held-out gap less the sensor floor, within 10 %: the held-out fits' own spread)."""
+    """Exact derivatives: the floor is at most the five-point stencil's own truncation, which the
+    seven-point alternative shows (interior against interior, the ends shared): below 20 % of the
+    noise floor at 1e-4 noise and 500 Hz, the referees' slowest rate (the acceleration's error
+    (ωh)⁴/90 is 7e-4 at 40 Hz; measured 13.5 %, 0 at 1 kHz), and never above the gap it stands
+    for (the nominal's held-out gap less the sensor floor, plus the held-out fits' 10 % spread);
+    numpy.gradient's torque: the floor is the gap the choice leaves (within 10 %: that spread)."""
     cfg = DiagnosisConfig()
     for kind, fs in (("exact", 500.0), ("gradient", JOINT_FS_HZ)):
         records, _ = _records(kind, 1e-4, fs)
         results, _ = diagnose_joint(records, cfg)
         gap = results["gap"]
         if kind == "exact":
-            assert gap["derivative_floor"] < 0.01 * gap["sensor_noise_floor"]
+            assert gap["derivative_floor"] < 0.2 * gap["sensor_noise_floor"]
+            excess = max(gap["nominal"] - gap["sensor_noise_floor"], 0.0)
+            assert gap["derivative_floor"] <= 1.1 * excess + 0.1 * gap["sensor_noise_floor"]
         else:
             trials, hp, y_band = prepared(records, cfg)
             assert derivative_floor(trials, hp, y_band) > 0
