@@ -67,7 +67,9 @@ def _seven_point(x: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray]:
 _ALTERNATIVES = (_two_point_difference, _seven_point)
 
 
-def _own_ends(v: np.ndarray, a: np.ndarray, v_own: np.ndarray, a_own: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def _own_ends(
+    v: np.ndarray, a: np.ndarray, v_own: np.ndarray, a_own: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
     """``(v, a)`` with the first and last :data:`~.data.EDGE_SAMPLES` samples of the diagnosis' own
     estimates: the floor compares the interior conventions, whose difference a torque's producer
     may carry throughout; the end samples' stencils are an artefact of the record's cut, amplified
