@@ -12,6 +12,8 @@ from collections.abc import Mapping, Sequence
 from pathlib import PurePath
 from typing import Any
 
+from armlab.diagnosis.summary import final_gap
+
 #: Readable names of the catalogue candidates (the catalogue key is printed beside them).
 LABELS = {
     "reflex": "a stretch reflex",
@@ -360,9 +362,8 @@ def figure_lines(figures: Sequence[str]) -> list[str]:
 
 
 def summary_lines(r: Mapping[str, Any], indent: str) -> list[str]:
-    stages = r.get("how_far") or []
     nominal = r["gap"]["nominal"]
-    final = stages[-1]["held_out_gap"] if stages else nominal
+    final = final_gap(r["gap"])  # an accounted floor (joint_1dof's encoder grid) included
     top = [
         f"{e['name']} ({fmt_score(e['delta_bic'])})" if e.get("identifiable", True) else f"{e['name']} (n/i)"
         for e in (r.get("ranking") or [])[:3]

@@ -16,7 +16,7 @@ from armlab.config.diagnosis import DiagnosisConfig
 from armlab.diagnosis.attribution import Selection, held_out_gap
 from armlab.diagnosis.families import FittedModel
 
-__all__ = ["gap_section", "row_floor", "stage_entry", "verdict_section"]
+__all__ = ["final_gap", "gap_section", "row_floor", "stage_entry", "verdict_section"]
 
 
 def row_floor(scoring_set, y: np.ndarray) -> float:
@@ -49,6 +49,17 @@ def verdict_section(protocol: str, cfg: DiagnosisConfig, sel: Selection) -> dict
         "ranking": strip[0] if strip else [],
         "ranking_steps": strip,
     }
+
+
+def final_gap(gap) -> float:
+    """The held-out gap of the verdict's model from a ``results["gap"]`` section: the last added
+    effect's (the nominal's if none), less the floor an ``accounted`` effect stands for (joint_1dof's
+    encoder grid: an error no model removes, named in the verdict), not below the noise floor."""
+    last = float(gap["added"][-1]["held_out_gap"]) if gap["added"] else float(gap["nominal"])
+    acc = gap.get("accounted")
+    if not acc:
+        return last
+    return max(last - float(acc["floor"]), min(last, float(gap["noise_floor"])))
 
 
 def gap_section(metric: str, stages: list[dict], floor: float) -> dict:

@@ -41,7 +41,11 @@ from armlab.protocols.joint_1dof.diagnosis.models import (
     JOINT_TV_FAMILY,
     OP_LINEAR_NAMES,
 )
-from armlab.protocols.joint_1dof.diagnosis.position_sensor import position_sensor_summary
+from armlab.protocols.joint_1dof.diagnosis.position_sensor import (
+    GRID_EFFECT,
+    grid_floor,
+    position_sensor_summary,
+)
 from armlab.protocols.joint_1dof.diagnosis.rules import RULES
 from armlab.protocols.joint_1dof.diagnosis.time_varying import scan_operating_point
 
@@ -212,6 +216,39 @@ def _check_rate(names: list[str], fs_fit: float, fs_raw: float) -> None:
                 )
 
 
+def _grid_named(
+    cfg: DiagnosisConfig,
+    verdict: list[str],
+    partial: list[str],
+    stages: list[dict],
+    floor: float,
+    grid: float,
+) -> tuple[list[str], list[str], float] | None:
+    """(verdict, partial, floor accounted) naming the encoder's grid as the floor that explains
+    the rest of the gap, or None to leave the verdict as it is.
+
+    Only where the selection ended in ``unknown`` (nothing accepted, or a partial explanation):
+    the grid's floor ``grid`` (:func:`~.position_sensor.grid_floor`, the whole gap the grid leaves
+    in the nominal) less what the stage adding ``encoder_quantisation`` already removed, if one
+    did, is judged as an effect by the core's rules: the first one's share when nothing was
+    accepted before it (``min_first_explained`` of the nominal's excess) and, with the accepted
+    effects, leaving at most ``1 - min_explained`` of it
+    (:func:`~armlab.diagnosis.attribution.explains_enough`). ``stages``: the selection's stages
+    (``held_out_gap``, ``effects``), the nominal first."""
+    if grid <= 0 or "unknown" not in verdict:
+        return None
+    gaps = [st["held_out_gap"] for st in stages]
+    excess0 = max(gaps[0] - floor, 0.0)
+    at = next((i for i, st in enumerate(stages) if GRID_EFFECT in st["effects"]), None)
+    rest = grid if at is None else max(grid - (gaps[at - 1] - gaps[at]), 0.0)
+    if not partial and rest < cfg.min_first_explained * excess0:
+        return None
+    if not explains_enough(cfg, left=gaps[-1] - floor - rest, excess0=excess0, floor=floor):
+        return None
+    named = partial if GRID_EFFECT in partial else [*partial, GRID_EFFECT]
+    return named, [], rest
+
+
 def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
     trials, hp, y_band = prepare_scoring(records, cfg)
     fs = trials[0].fs_hz
@@ -267,6 +304,11 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
         explained = explains_enough(cfg, left=left, excess0=excess, floor=floor)
         verdict = [_OP_EFFECT, *accepted] if explained else [_OP_EFFECT, *accepted, "unknown"]
         partial = [] if explained else [_OP_EFFECT, *accepted]
+    # an encoder's grid that no model of the recorded angle removes: a floor (:mod:`.position_sensor`)
+    grid = grid_floor(trials, nominal.beta, hp, y_band) if GRID_EFFECT in names else 0.0
+    named = _grid_named(cfg, verdict, partial, stages, floor, grid)
+    if named is not None:
+        verdict, partial, grid_rest = named
     # below the scoring band (:mod:`.low_band`): a drift is named where the band itself needs nothing
     low = low_band_check(
         trials,
@@ -289,7 +331,12 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
             "derivative_floor": deriv_floor,
             "noise_source": noise.source,
             # the recorded angle's error and the gap it leaves in the nominal (not in the floor)
-            "position_sensor": position_sensor_summary(trials, nominal.beta, y_band, cfg.band_hz),
+            "position_sensor": {
+                **position_sensor_summary(trials, nominal.beta, y_band, cfg.band_hz),
+                "grid_floor": grid,
+            },
+            # a floor named in the verdict: accounted for in the gap, not removed from it
+            **({"accounted": {"effect": GRID_EFFECT, "floor": grid_rest}} if named is not None else {}),
         },
         "where": {
             "bands": stages[0]["bands"],

@@ -38,6 +38,7 @@ from armlab.diagnosis.report_text import (
     window_meaning,
     xcorr_meaning,
 )
+from armlab.protocols.joint_1dof.diagnosis.report_grid import grid_how_far_row, grid_verdict_paragraph
 from armlab.protocols.joint_1dof.diagnosis.report_low_band import drift_verdict_paragraph, low_band_section
 from armlab.protocols.joint_1dof.diagnosis.report_operating_point import operating_point_section
 from armlab.protocols.joint_1dof.diagnosis.rules import RULES
@@ -288,6 +289,7 @@ def _how_far(r: Mapping[str, Any], h: str) -> list[str]:
             ]
             for n, s in zip(names, stages, strict=True)
         ]
+        + [row for row in [grid_how_far_row(r["gap"], floor, excess0)] if row]
         + [["noise floor", fmt_pct(floor), fmt_vaf(floor), "1×", "", ""]],
     )
     trials = [p["trial"] for p in stages[0]["per_trial"]] if stages else []
@@ -360,7 +362,7 @@ def _one(r: Mapping[str, Any], h: str, settings: Mapping[str, Any] | None) -> li
     op = operating_point_section(r, h)
     low = low_band_section(r, h)
     return [
-        drift_verdict_paragraph(r) or verdict_paragraph(r, settings),
+        drift_verdict_paragraph(r) or grid_verdict_paragraph(r) or verdict_paragraph(r, settings),
         "",
         *([*op, ""] if op else []),
         *_where(r, h),
