@@ -179,11 +179,12 @@ def test_grid_floor_is_the_gap_the_grid_leaves(family):
             float(np.sum(nominal_prediction(tr, tr.x_raw - x, beta, hp)[tr.held] ** 2)) for tr in trials
         )
         ratios.append(grid_floor(trials, [beta, beta], hp, y_band) * tss / true)
-    # where in its cell the angle holds is unknown (drawn uniform) and the speeds it settles at
-    # are those of the neighbouring runs: measured 0.51-1.50 over 8 seeds of each family (fast
-    # 0.89-1.46, slow 0.88-1.50, steps 1.11-1.46, sines 0.51-0.89); a factor of 2.5 either way
-    # still fails a floor that misses the holds or the crossings (white q²/12 on these: up to 4x off)
-    assert all(0.4 < r < 2.5 for r in ratios), ratios
+    # where in its cell the angle holds is unknown (drawn uniform) and the speeds it settles at are
+    # the least its crossings allow: measured over 8 seeds of each family 0.78-1.06 (fast),
+    # 0.82-0.94 (slow), 0.85-0.99 (steps), 0.34-1.04 (sines: slow crossings are ramps the model
+    # rounds off); bounds a factor of ~3-4 out, which a white q²/12 per sample (12-88x on the
+    # PRBS and steps) fails
+    assert all(0.25 < r < 3.0 for r in ratios), ratios
 
 
 def test_grid_floor_is_zero_off_the_grid():
@@ -208,7 +209,7 @@ def test_a_grid_no_model_removes_is_named_as_its_floor(seed):
     # what the smoother's stage left is the grid's (the torque noise is the only other error):
     # the floor accounted for is that rest within the floor's own spread (see the test above)
     rest = gap["added"][-1]["held_out_gap"] - gap["noise_floor"]
-    assert 0.4 < gap["accounted"]["floor"] / rest < 2.5
+    assert 0.25 < gap["accounted"]["floor"] / rest < 3.0
     scored = score_case("encoder_quantisation", results, {"encoder_quantisation"})
     assert scored["top1"] and scored["shrink_of_excess"] > 0.7  # the target
     # the report says it is a floor, and gives the gap with it accounted for

@@ -59,7 +59,8 @@ def test_an_unknown_generator_is_refused_naming_the_valid_ones(tmp_path):
     strict=True,
     reason="measured on the evaluation seed 1000, 130 datasets (docs/joint_1dof_referees.md, session 22): "
     "top-1 where ENR >= 1 73 % (66 of 90), false alarms 0 %; short: encoder_quantisation 1/8 (4/8 after "
-    "session 23's derivative-floor fix, rerun with none and channel_delay only: 10/10 and 7/8 as before), "
+    "session 23's derivative-floor fix, 8/8 after session 24's grid floor, each rerun with none and "
+    "channel_delay only: 10/10 and 7/8 as before), "
     "left_out:reflex 3/8 (named cocontraction_variation), force_sensor_bandwidth 2/5 (a kHz sensor is a "
     "lag, named channel_delay), cuff_compliance 2/4 and transmission 2/3 (the nested pair)",
 )
