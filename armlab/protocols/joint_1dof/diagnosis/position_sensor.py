@@ -75,9 +75,9 @@ from armlab.dsp import five_point_derivatives, lowpass_zero_phase, zero_phase
 from armlab.protocols.joint_1dof.diagnosis.data import derivatives
 
 __all__ = [
+    "GRID_DRAWS",
     "GRID_EFFECT",
     "GRID_LEVELS",
-    "GRID_DRAWS",
     "NOISE_EFFECT",
     "denoised_columns",
     "grid_floor",
