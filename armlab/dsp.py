@@ -121,7 +121,42 @@ def zero_phase(sos: np.ndarray, x: np.ndarray, axis: int = -1, padtype: str = "o
     Returns:
         Filtered array, same shape and unit as ``x``.
     """
-    return signal.sosfiltfilt(sos, x, axis=axis, padtype=padtype)
+    sos = np.asarray(sos)
+    x = np.asarray(x)
+    if padtype not in ("odd", "even") or sos.dtype != np.float64 or x.dtype != np.float64 or x.ndim == 0:
+        return signal.sosfiltfilt(sos, x, axis=axis, padtype=padtype)
+    # scipy.signal.sosfiltfilt's steps, one by one (so the same numbers to the bit), with the
+    # filter's step-response state remembered per design: SciPy builds it afresh on each call
+    # (a companion matrix and a solve per section), a quarter of a 15 000-sample column's cost,
+    # and a diagnosis filters ~10^4 columns with the same few designs
+    edge = sosfiltfilt_padlen(sos)
+    axis = axis % x.ndim
+    if x.shape[axis] <= edge:
+        raise ValueError(f"The length of the input vector x must be greater than padlen, which is {edge}.")
+
+    def cut(z, start=None, stop=None, step=None):
+        index = [slice(None)] * z.ndim
+        index[axis] = slice(start, stop, step)
+        return z[tuple(index)]
+
+    left, right = cut(x, edge, 0, -1), cut(x, -2, -(edge + 2), -1)
+    if padtype == "odd":
+        left, right = 2 * cut(x, 0, 1) - left, 2 * cut(x, -1) - right
+    ext = np.concatenate((left, x, right), axis=axis)
+    shape = [1] * x.ndim
+    shape[axis] = 2
+    zi = _sos_zi(sos.tobytes(), sos.shape[0]).reshape([sos.shape[0]] + shape)
+    y, _ = signal.sosfilt(sos, ext, axis=axis, zi=zi * cut(ext, stop=1))
+    y, _ = signal.sosfilt(sos, cut(y, step=-1), axis=axis, zi=zi * cut(y, start=-1))
+    return cut(cut(y, step=-1), edge, -edge)
+
+
+@lru_cache(maxsize=256)
+def _sos_zi(key: bytes, n_sections: int) -> np.ndarray:
+    """``scipy.signal.sosfilt_zi`` of the sections stored in ``key`` (read-only, remembered)."""
+    zi = signal.sosfilt_zi(np.frombuffer(key).reshape(n_sections, 6))
+    zi.flags.writeable = False
+    return zi
 
 
 def lowpass_zero_phase(

@@ -206,14 +206,15 @@ def test_the_remembered_designs_are_handed_out_as_copies():
 def test_a_remembered_spectrum_is_never_handed_out_for_a_changed_signal():
     """The padded-spectrum memory of the diagnosis's delay search: a signal changed in place (same
     object, same shape, same pad) must get its own spectrum, equal to one computed afresh."""
-    from armlab.diagnosis.families import _padded_spectrum
+    from armlab.diagnosis.families import _padded_spectrum, padded_length
 
     rng = np.random.default_rng(0)
     z = rng.standard_normal(500)
     first = _padded_spectrum(z, 7).copy()
     z[100] += 1.0  # the same array, changed
     again = _padded_spectrum(z, 7)
-    fresh = np.fft.rfft(np.concatenate([np.full(7, z[0]), z, np.full(7, z[-1])]))
+    back = padded_length(500, 7) - 507
+    fresh = np.fft.rfft(np.concatenate([np.full(7, z[0]), z, np.full(back, z[-1])]))
     np.testing.assert_array_equal(again, fresh)
     assert not np.array_equal(again, first)
 
@@ -236,3 +237,49 @@ def test_lowpass_noise_in_row_blocks_equals_one_draw_filtered_at_once(monkeypatc
     gain = math.sqrt(float(np.sum(signal.sosfilt(sos, impulse) ** 2)))
     white = np.random.default_rng(4).standard_normal((shape[0], n_burn + shape[1], shape[2]))
     np.testing.assert_array_equal(got, signal.sosfilt(sos, white, axis=1)[:, n_burn:] / gain)
+
+
+@pytest.mark.parametrize("n, pad", [(106000, 258), (60000, 258), (15000, 9), (500, 7)])
+def test_the_padded_length_holds_the_pad_and_has_only_small_prime_factors(n, pad):
+    """The spectral shift's and sensor response's padded length: at least the pad on both sides,
+    lengthened to a 5-smooth length (106 s at 1 kHz padded by 258 was 4·31·859)."""
+    from armlab.diagnosis.families import padded_length
+
+    m = padded_length(n, pad)
+    assert n + 2 * pad <= m <= 1.1 * (n + 2 * pad)
+    for p in (2, 3, 5):
+        while m % p == 0:
+            m //= p
+    assert m == 1
+
+
+def test_a_delay_by_the_padded_spectrum_matches_a_shift_by_whole_samples_inside_the_record():
+    """shift_columns by an integer number of samples moves a smooth record exactly (to rounding)
+    away from its ends, whatever the padded length."""
+    from armlab.diagnosis.families import shift_columns
+
+    fs = 1000.0
+    t = np.arange(15000) / fs
+    z = np.sin(2 * np.pi * 1.3 * t) + 0.3 * np.cos(2 * np.pi * 4.1 * t)
+    out = shift_columns(t, z, 0.012)
+    np.testing.assert_allclose(out[500:-500], z[488:-512], atol=1e-9)
+
+
+@pytest.mark.parametrize("padtype", ["odd", "even"])
+@pytest.mark.parametrize("shape, axis", [((3000,), 0), ((3000, 3), 0), ((4, 900, 2), 1), ((3, 500), -1)])
+def test_zero_phase_is_sosfiltfilt_to_the_bit(shape, axis, padtype):
+    """zero_phase remembers the filter's initial state but otherwise takes SciPy's steps: the same
+    numbers and the same memory layout as ``scipy.signal.sosfiltfilt`` (low, high, band-pass)."""
+    from scipy import signal
+
+    from armlab.dsp import butterworth, zero_phase
+
+    x = np.random.default_rng(3).standard_normal(shape)
+    for sos in (
+        butterworth(20.0, 1000.0, 4),
+        butterworth(0.3, 1000.0, 2, btype="high"),
+        butterworth((1.0, 40.0), 1000.0, 3, btype="bandpass"),
+    ):
+        want = signal.sosfiltfilt(sos, x, axis=axis, padtype=padtype)
+        got = zero_phase(sos, x, axis=axis, padtype=padtype)
+        assert np.array_equal(got, want) and got.strides == want.strides

@@ -30,7 +30,7 @@ import numpy as np
 from armlab import progress
 from armlab.config.diagnosis import DiagnosisConfig
 from armlab.config.effects import EFFECTS
-from armlab.cpus import usable_cpus
+from armlab.cpus import single_threaded_blas, usable_cpus
 from armlab.diagnosis.families import FittedModel, ModelFamily, Surrogate, fit_model
 from armlab.errors import ConfigError
 
@@ -194,8 +194,12 @@ def select_effects(
         progress.stage(f"try effects (step {step + 1})", len(tried), "candidates")
 
         # the candidates' fits are independent: on threads (NumPy's FFTs, SciPy's filters and
-        # BLAS release the GIL), each the same computation as alone, so the same numbers
-        with ThreadPoolExecutor(max_workers=usable_cpus()) as pool:
+        # BLAS release the GIL), each the same computation as alone, so the same numbers; BLAS
+        # on one thread, as the pool already fills the cores: its products here are small (a
+        # few columns by 10^4 samples), and OpenBLAS's own threads, woken for each one, cost more
+        # than they gave (REKLAB folder on the 2-core machine: 74 s of CPU, 40 s wall with them;
+        # 44 s, 27 s without)
+        with single_threaded_blas(), ThreadPoolExecutor(max_workers=usable_cpus()) as pool:
             fits = {
                 n: pool.submit(
                     fit_model,

@@ -13,7 +13,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from armlab.diagnosis.families import NLParam
+from armlab.diagnosis.families import NLParam, padded_length
 from armlab.protocols.joint_1dof.diagnosis.data import PreparedTrial
 
 __all__ = ["COMPLIANCE_PARAMS", "compliance_torque", "start_compliance"]
@@ -44,7 +44,7 @@ def compliance_torque(tr: PreparedTrial, tau2: float, tau1: float, ratio: float,
     pad, s, spectrum = _padded_angle_spectrum(tr)
     zp = (tau2 * s + tau1) * s + 1.0
     n = tr.x_raw.size
-    correction = np.fft.irfft(zp * zp / (zp + ratio * (1.0 + tc * s)) * spectrum, n + 2 * pad)
+    correction = np.fft.irfft(zp * zp / (zp + ratio * (1.0 + tc * s)) * spectrum, padded_length(n, pad))
     return tau2 * tr.a + tau1 * tr.v + tr.x - tr.to_fit_rate(correction[pad : pad + n])
 
 
@@ -54,7 +54,7 @@ def _padded_angle_spectrum(tr: PreparedTrial) -> tuple[int, np.ndarray, np.ndarr
     evaluation of a compliance on the trial (a third of its cost on 60 s at 1 kHz)."""
     x = tr.x_raw
     pad = int(_PAD_S * tr.raw_fs_hz) + 8
-    z = np.concatenate([np.full(pad, x[0]), x, np.full(pad, x[-1])])
+    z = np.concatenate([np.full(pad, x[0]), x, np.full(padded_length(x.size, pad) - x.size - pad, x[-1])])
     s = 2j * np.pi * np.fft.rfftfreq(z.size, 1.0 / tr.raw_fs_hz)
     spectrum = np.fft.rfft(z)
     s.flags.writeable = False
