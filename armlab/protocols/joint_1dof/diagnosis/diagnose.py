@@ -48,6 +48,7 @@ from armlab.protocols.joint_1dof.diagnosis.position_sensor import (
 )
 from armlab.protocols.joint_1dof.diagnosis.rules import RULES
 from armlab.protocols.joint_1dof.diagnosis.time_varying import scan_operating_point
+from armlab.protocols.joint_1dof.diagnosis.tonic_cue import tonic_cue_check
 
 __all__ = [
     "candidate_names",
@@ -57,6 +58,7 @@ __all__ = [
 ]
 
 _METRIC = "held-out residual power / measured power in the scoring band (1 - VAF)"
+_COCONTRACTION = "cocontraction_variation"  # the candidate whose cue :mod:`.tonic_cue` checks
 
 
 def candidate_names(cfg: DiagnosisConfig) -> list[str]:
@@ -262,6 +264,11 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
     floor = sensor_floor + deriv_floor
     names = candidate_names(cfg)
     _check_rate(names, fs, records[0].fs_hz)
+    # a tonic level that the perturbation's speed envelope drives is no cue of co-contraction
+    # (:mod:`.tonic_cue`): the candidate is not tried
+    cue = tonic_cue_check(trials, cfg.slow_hz)
+    cue["excluded"] = [_COCONTRACTION] if cue["driven"] and _COCONTRACTION in names else []
+    names = [n for n in names if n not in cue["excluded"]]
     band_share = (cfg.band_hz - cfg.highpass_hz) / (0.5 * fs)
     varying, stationary, tv_nominal = None, None, None
     if all(tr.op is not None for tr in trials):  # a time-varying recording
@@ -352,6 +359,7 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
         "torque_sign": "antiphase (impedance = -torque/position)" if sign < 0 else "in phase",
         **({"operating_point": varying} if varying is not None else {}),
         "low_band": low,
+        "tonic_cue": cue,
         "trials": [tr.name for tr in trials],
     }
     series = {

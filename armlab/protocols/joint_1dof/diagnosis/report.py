@@ -187,6 +187,16 @@ def _which(r: Mapping[str, Any], h: str, settings: Mapping[str, Any] | None) -> 
         f"least {100 * float(s.get('min_first_explained', 0.4)):.0f} % of the excess; up to "
         f"{s.get('max_effects', 3)} effects are added greedily.",
     ]
+    cue = r.get("tonic_cue") or {}
+    if cue.get("excluded"):
+        out += [
+            "",
+            f"`{'`, `'.join(cue['excluded'])}` was not tried: the perturbation's own slow speed envelope "
+            f"explains {fmt_num(100 * float(cue['perturbation_share']))} % of the tonic torque's variance "
+            f"(at least {fmt_num(100 * float(cue['max_share']))} % counts as driven by the perturbation), so "
+            "the tonic level is a response to the perturbation (e.g. a stretch reflex's mean), not the "
+            "subject's co-contraction that candidate reads from it.",
+        ]
     for step, entries in enumerate(r.get("ranking_steps") or [r.get("ranking") or []]):
         base = stage_name(effects[:step])
         out += ["", f"{h}# Step {step + 1}: candidates added to the {base} model", ""]
