@@ -7,13 +7,13 @@ the subject's own and change independently of the perturbation (Hunter & Kearney
 J. Biomech. 15:747: stiffness rises with the tonic torque; a subject co-contracts or relaxes at
 will). A torque that the perturbation itself drives has a slow part too: a stretch reflex is a
 rectifier, and its mean over the last fraction of a second is the envelope of the stretch
-velocity; Coulomb friction's mean follows the share of time spent sliding. Then ``m(t)`` is that
-envelope, and ``m·θ``, ``m·θ̇`` are a speed-dependent stiffness and damping that mimic the
-missing effect. On the ODE referee's tuning seeds (7, 11, 13), with the reflex left out of the
-candidates, this is how co-contraction came to explain 94-98 % of a reflex under multisines
-(seed 11). Without it the series compliance of the cuff comes next there (83-95 %) and is named
-instead: under a multisine a reflex is, in band, mostly a linear delayed feedback, and this
-check does not tell it from a compliance (that would take its rectification's distortion).
+velocity. Then ``m(t)`` is that envelope, and ``m·θ``, ``m·θ̇`` are a speed-dependent
+stiffness and damping that mimic the missing effect. On the ODE referee's tuning seeds (7, 11,
+13), with the reflex left out of the candidates, this is how co-contraction came to explain 94-98 %
+of a reflex under multisines (seed 11). Without it the series compliance of the cuff comes next
+there (83-95 %) and is named instead: under a multisine a reflex is, in band, mostly a linear
+delayed feedback, and this check does not tell it from a compliance (that would take its
+rectification's distortion).
 
 The check: the share of ``m(t)``'s variance that the perturbation's own slow speed envelope
 explains (least squares on ``[1, lp|θ̇|, lp θ̇²]``, ``lp`` the tonic torque's own low-pass),
