@@ -224,12 +224,13 @@ def test_lowpass_noise_in_row_blocks_equals_one_draw_filtered_at_once(monkeypatc
     # lowpass_noise draws and filters the rows in blocks (the next drawn while the last filters on
     # a second thread): bit-identical to one standard_normal call of the lengthened shape filtered
     # at once, on one core and on two
-    from armlab.dsp import butterworth, lowpass_noise
+    from armlab.dsp import butterworth
+    from armlab.noise import lowpass_noise
 
     monkeypatch.setattr("armlab.dsp.usable_cpus", lambda: cores)
     fs, fc, periods, shape = 1000.0, 2.0, 4.0, (7, 300, 2)
     n_burn = int(math.ceil(periods * fs / fc))
-    monkeypatch.setattr("armlab.dsp._BLOCK_SIZE", 3 * (n_burn + shape[1]) * shape[2])  # 3 rows a block
+    monkeypatch.setattr("armlab.noise._BLOCK_SIZE", 3 * (n_burn + shape[1]) * shape[2])  # 3 rows a block
     got = lowpass_noise(np.random.default_rng(4), shape, fs, fc, burn_in_periods=periods)
     sos = butterworth(fc, fs, 2)
     impulse = np.zeros(int(math.ceil(20.0 * fs / fc)))

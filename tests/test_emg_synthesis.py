@@ -8,8 +8,9 @@ import pytest
 from numpy.testing import assert_allclose
 from scipy import signal
 
-from armlab.dsp import bandpass_noise, butterworth
+from armlab.dsp import butterworth
 from armlab.errors import ConfigError, DataError
+from armlab.noise import bandpass_noise
 from armlab.sensors import (
     ELECTRODES,
     EMG_BAND_HZ,

@@ -8,7 +8,7 @@ implemented here for every electrode i::
     emg_j(t) = s_j(t) + c sum_{i in N(j)} s_i(t) + nu_j  what electrode j records
 
 with u_i the neural drive (the muscle command, 0..1), n_i unit-rms Gaussian noise band-limited to
-20-450 Hz (the wireless sensor's band; :func:`armlab.dsp.bandpass_noise`), independent per
+20-450 Hz (the wireless sensor's band; :func:`armlab.noise.bandpass_noise`), independent per
 channel and trial, g_i the rms amplitude at full drive, c the cross-talk fraction between
 neighbouring electrodes N(j) (:data:`EMG_NEIGHBOURS`) and nu the electrode's own noise and
 converter (a :class:`~armlab.sensors.channel.ChannelSpec` through
@@ -23,9 +23,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from armlab.dsp import bandpass_noise
 from armlab.errors import ConfigError, DataError
 from armlab.models.arm_5dof import ELECTRODE_MUSCLES
+from armlab.noise import bandpass_noise
 from armlab.sensors.channel import ChannelSpec, apply_channel
 
 __all__ = [
@@ -162,7 +162,7 @@ def synthesize_emg(drive: np.ndarray, fs_hz: float, spec: EmgSpec, rng: np.rando
     """Recorded EMG of the electrodes from their muscles' neural drive (module docstring).
 
     Random draws, in this order: the carriers (n_trials, n_samples, n_channels) in one
-    :func:`armlab.dsp.bandpass_noise` call, then the sensor's (:func:`apply_channel`), so one
+    :func:`armlab.noise.bandpass_noise` call, then the sensor's (:func:`apply_channel`), so one
     generator state gives bit-identical output.
 
     Args:

@@ -55,9 +55,10 @@ from scipy import interpolate, signal
 
 from armlab.config.effects import EffectsConfig, Reflex, enabled_effects
 from armlab.cpus import usable_cpus
-from armlab.dsp import lowpass_noise, second_order_ba, second_order_lowpass
+from armlab.dsp import second_order_ba, second_order_lowpass
 from armlab.errors import ConfigError, DataError
 from armlab.models.joint_rig_scene import Joint1DofScene, JointSubject, build_joint_rig_scene
+from armlab.noise import lowpass_noise
 from armlab.sensors.channel import ChannelSpec, apply_channel
 from armlab.sim.stability import TrialLabels, check_bound, check_rollout
 

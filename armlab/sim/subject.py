@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 
 from armlab.config.subject import SubjectConfig
-from armlab.dsp import lowpass_noise
+from armlab.noise import lowpass_noise
 
 __all__ = ["BURN_IN_PERIODS", "activation_commands", "commands", "fluctuation", "sample_commands"]
 
@@ -28,7 +28,7 @@ def fluctuation(
 ) -> np.ndarray:
     """The relative activation ``1 + trial_cv η + fluctuation_cv ε`` of every trial at every sample.
 
-    η: one standard normal per trial; ε: unit-rms low-pass noise (:func:`armlab.dsp.lowpass_noise`).
+    η: one standard normal per trial; ε: unit-rms low-pass noise (:func:`armlab.noise.lowpass_noise`).
     Needs no scene: a caller may draw it while the scene is built and settled.
 
     Args:
