@@ -22,6 +22,7 @@ LAYERS: dict[str, int] = {
     "armlab.progress": 0,
     "armlab.config": 0,
     "armlab.dsp": 0,
+    "armlab.noise": 0,
     "armlab.models": 1,
     "armlab.perturbations": 2,
     "armlab.sensors": 2,
