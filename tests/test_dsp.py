@@ -227,7 +227,7 @@ def test_lowpass_noise_in_row_blocks_equals_one_draw_filtered_at_once(monkeypatc
     from armlab.dsp import butterworth
     from armlab.noise import lowpass_noise
 
-    monkeypatch.setattr("armlab.dsp.usable_cpus", lambda: cores)
+    monkeypatch.setattr("armlab.noise.usable_cpus", lambda: cores)  # where _filtered_noise asks
     fs, fc, periods, shape = 1000.0, 2.0, 4.0, (7, 300, 2)
     n_burn = int(math.ceil(periods * fs / fc))
     monkeypatch.setattr("armlab.noise._BLOCK_SIZE", 3 * (n_burn + shape[1]) * shape[2])  # 3 rows a block

@@ -10,7 +10,7 @@ from conftest import JOINT_FS_HZ, JointTrial, nominal_torque, reflex_torque
 from scipy import signal
 
 from armlab.config.diagnosis import DiagnosisConfig, RefereeConfig
-from armlab.dsp import lowpass_zero_phase
+from armlab.protocols.joint_1dof.diagnosis.data import slow_lowpass
 from armlab.protocols.joint_1dof.diagnosis.diagnose import diagnose_joint
 from armlab.protocols.joint_1dof.diagnosis.referee import make_dataset
 from armlab.protocols.joint_1dof.diagnosis.report import format_report
@@ -45,9 +45,9 @@ def _velocity(rng, n: int) -> np.ndarray:
 def test_a_tonic_level_made_of_the_speed_envelope_is_read_as_the_perturbations(seed):
     rng = np.random.default_rng(seed)
     v = _velocity(rng, int(40 * _FS))
-    # the speed envelope (a reflex acting on stretch in both directions, or friction's mean) plus a
-    # little independent wander: 1 / (1 + 0.2²) = 0.96 of m's variance is the envelope's
-    m = lowpass_zero_phase(np.abs(v), _FS, _SLOW_HZ, 2, axis=0, padtype="even")  # the tonic torque's filter
+    # the speed envelope (a reflex acting on stretch in both directions) plus a little independent
+    # wander: 1 / (1 + 0.2²) = 0.96 of m's variance is the envelope's
+    m = slow_lowpass(np.abs(v), _FS, _SLOW_HZ)  # the tonic torque's filter
     m = m / m.std() + 0.2 * _slow(rng, v.size, _FS)
     assert perturbation_share(m, v, _FS, _SLOW_HZ) > 0.9
 

@@ -54,6 +54,7 @@ __all__ = [
     "noise_floor",
     "prepare_trials",
     "repeat_groups",
+    "slow_lowpass",
 ]
 
 _REPEAT_CORR = 0.99  # 1, position correlation above which two trials are repeats
@@ -143,11 +144,15 @@ def derivatives(x: np.ndarray, fs: float) -> tuple[np.ndarray, np.ndarray]:
     return v, a
 
 
+def slow_lowpass(z: np.ndarray, fs_hz: float, slow_hz: float) -> np.ndarray:
+    """The tonic level's zero-phase low-pass at ``slow_hz`` along axis 0 (order :data:`_SLOW_ORDER`,
+    mirrored ends): what :class:`PreparedTrial`'s ``m`` and the checks on it read as slow."""
+    return lowpass_zero_phase(z, fs_hz, slow_hz, _SLOW_ORDER, axis=0, padtype=_PADTYPE)
+
+
 def _tonic_torque(position: np.ndarray, torque: np.ndarray, slow_hz: float, fs: float) -> np.ndarray:
     """Slow torque not explained by the slow position: ``lp(τ) − (c0 + c1·lp(θ))``, least squares."""
-    slow_t, slow_x = (
-        lowpass_zero_phase(z, fs, slow_hz, _SLOW_ORDER, axis=0, padtype=_PADTYPE) for z in (torque, position)
-    )
+    slow_t, slow_x = (slow_lowpass(z, fs, slow_hz) for z in (torque, position))
     basis = np.stack([np.ones_like(slow_x), slow_x], axis=1)
     coef, *_ = np.linalg.lstsq(basis, slow_t, rcond=None)
     return slow_t - basis @ coef

@@ -37,7 +37,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from armlab.dsp import lowpass_zero_phase
+from armlab.protocols.joint_1dof.diagnosis.data import slow_lowpass
 
 __all__ = ["MAX_PERTURBATION_SHARE", "perturbation_share", "tonic_cue_check"]
 
@@ -46,21 +46,17 @@ __all__ = ["MAX_PERTURBATION_SHARE", "perturbation_share", "tonic_cue_check"]
 #: co-contractions' 0.27 and the multisine reflexes' 0.88 on the tuning seeds (docstring)
 MAX_PERTURBATION_SHARE = 0.5
 
-_SLOW_ORDER = 2  # the tonic torque's low-pass order (.data._SLOW_ORDER), so both see one band
-
 
 def perturbation_share(m: np.ndarray, v: np.ndarray, fs_hz: float, slow_hz: float) -> float:
     """R² of the tonic level ``m`` (n,) on ``[1, lp|v|, lp v²]`` of the velocity ``v`` (n,) rad/s
-    sampled at ``fs_hz``, ``lp`` the zero-phase Butterworth low-pass at ``slow_hz`` (mirrored ends,
-    as the tonic torque's); 0 for a constant ``m``."""
+    sampled at ``fs_hz``, ``lp`` the tonic torque's low-pass at ``slow_hz`` (:func:`.data.slow_lowpass`);
+    0 for a constant ``m``."""
     m = np.asarray(m, float)
     v = np.asarray(v, float)
     spread = float(np.sum((m - m.mean()) ** 2))
     if spread <= 0.0:
         return 0.0
-    env = [
-        lowpass_zero_phase(z, fs_hz, slow_hz, _SLOW_ORDER, axis=0, padtype="even") for z in (np.abs(v), v * v)
-    ]
+    env = [slow_lowpass(z, fs_hz, slow_hz) for z in (np.abs(v), v * v)]  # the tonic torque's own band
     basis = np.stack([np.ones_like(m), *env], axis=1)
     coef, *_ = np.linalg.lstsq(basis, m, rcond=None)
     return float(max(0.0, 1.0 - np.sum((m - basis @ coef) ** 2) / spread))
