@@ -14,7 +14,11 @@ from armlab.protocols.joint_1dof.diagnosis.data import slow_lowpass
 from armlab.protocols.joint_1dof.diagnosis.diagnose import diagnose_joint
 from armlab.protocols.joint_1dof.diagnosis.referee import make_dataset
 from armlab.protocols.joint_1dof.diagnosis.report import format_report
-from armlab.protocols.joint_1dof.diagnosis.tonic_cue import MAX_PERTURBATION_SHARE, perturbation_share
+from armlab.protocols.joint_1dof.diagnosis.tonic_cue import (
+    MAX_PERTURBATION_SHARE,
+    held_verdict,
+    perturbation_share,
+)
 from armlab.runner.diagnose import run_diagnoser
 
 _FS = 250.0  # Hz, the diagnosis's fitting rate
@@ -110,3 +114,22 @@ def test_the_diagnosis_still_names_a_cocontraction_whose_tonic_level_is_the_subj
     results, _ = run_diagnoser(ds.folder, "joint_1dof", cfg)
     assert not results["tonic_cue"]["driven"] and results["tonic_cue"]["excluded"] == []
     assert results["verdict"] == ["cocontraction_variation"]
+
+
+_DRIVEN = {"driven": True}
+
+
+@pytest.mark.parametrize(
+    ("verdict", "held"),
+    [
+        (["cuff_compliance"], ["cuff_compliance"]),  # linear: no slow output under a fast input
+        (["channel_delay", "joint_friction"], ["channel_delay", "joint_friction"]),  # friction is odd
+        (["cuff_compliance", "reflex"], []),  # a rectifier is named: it can make the tonic level
+        (["none"], []),
+        (["unknown"], []),
+        (["operating_point_impedance", "cuff_compliance", "unknown"], []),  # already an unknown
+    ],
+)
+def test_a_driven_tonic_level_holds_back_a_verdict_that_cannot_make_it(verdict, held):
+    assert held_verdict(_DRIVEN, verdict) == held
+    assert held_verdict({"driven": False}, verdict) == []

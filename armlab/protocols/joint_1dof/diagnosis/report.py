@@ -41,6 +41,7 @@ from armlab.diagnosis.report_text import (
 from armlab.protocols.joint_1dof.diagnosis.report_grid import grid_how_far_row, grid_verdict_paragraph
 from armlab.protocols.joint_1dof.diagnosis.report_low_band import drift_verdict_paragraph, low_band_section
 from armlab.protocols.joint_1dof.diagnosis.report_operating_point import operating_point_section
+from armlab.protocols.joint_1dof.diagnosis.report_tonic import held_verdict_paragraph
 from armlab.protocols.joint_1dof.diagnosis.rules import RULES
 
 __all__ = [
@@ -171,7 +172,8 @@ def _where(r: Mapping[str, Any], h: str) -> list[str]:
 def _which(r: Mapping[str, Any], h: str, settings: Mapping[str, Any] | None) -> list[str]:
     s = settings or r.get("settings") or {}
     verdict = list(r.get("verdict") or [])
-    effects = [n for n in verdict if n not in ("none", "unknown")]
+    # the effects selected step by step: the verdict's, or with an unknown its partial explanation
+    effects = [n for n in verdict if n not in ("none", "unknown")] or list(r.get("partial") or [])
     out = [
         f"{h} Which: the candidate effects",
         "",
@@ -372,7 +374,10 @@ def _one(r: Mapping[str, Any], h: str, settings: Mapping[str, Any] | None) -> li
     op = operating_point_section(r, h)
     low = low_band_section(r, h)
     return [
-        drift_verdict_paragraph(r) or grid_verdict_paragraph(r) or verdict_paragraph(r, settings),
+        held_verdict_paragraph(r)
+        or drift_verdict_paragraph(r)
+        or grid_verdict_paragraph(r)
+        or verdict_paragraph(r, settings),
         "",
         *([*op, ""] if op else []),
         *_where(r, h),

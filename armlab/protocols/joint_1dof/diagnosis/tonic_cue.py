@@ -31,6 +31,20 @@ for the perturbation's and ``cocontraction_variation`` is not a candidate (said 
 
 The signed slow velocity ``lp θ̇`` is not in the basis: with it, smoothed random steps (whose slow
 velocity is the steps' own) lifted two hidden co-contractions to 0.82 and 0.94.
+
+**A driven tonic level is also evidence against a verdict that cannot make it**
+(:func:`held_verdict`). A linear effect (a compliance, a sensor's dynamics, a delay) puts out no
+power where its input has none, so a slow torque that follows the speed envelope of a fast
+perturbation is not its; Coulomb friction is odd in the velocity (its slow part follows the signed
+slow velocity, not the speed); a voluntary torque, a co-contraction and an encoder's grid are not
+driven by the stretch at all. Only a rectifier is: of the candidates, the stretch reflex
+(:data:`RECTIFYING_EFFECTS`). Where the tonic level is driven and the selection named effects none
+of which rectifies, those effects are a stand-in (under a multisine a reflex is, in band, mostly a
+linear delayed feedback, which the cuff's compliance fits to 83-95 %): the verdict is ``unknown``
+and they are kept as its partial explanation (``results.tonic_cue.held``, the report says why).
+The threshold is the same :data:`MAX_PERTURBATION_SHARE`; where it stands for this use is
+measured in docs/joint_1dof_referees.md (session 27: linear and friction classes on the tuning
+seeds).
 """
 
 from __future__ import annotations
@@ -39,12 +53,21 @@ import numpy as np
 
 from armlab.protocols.joint_1dof.diagnosis.data import slow_lowpass
 
-__all__ = ["MAX_PERTURBATION_SHARE", "perturbation_share", "tonic_cue_check"]
+__all__ = [
+    "MAX_PERTURBATION_SHARE",
+    "RECTIFYING_EFFECTS",
+    "held_verdict",
+    "perturbation_share",
+    "tonic_cue_check",
+]
 
 #: 1, mean share of the tonic torque's variance explained by the perturbation's speed envelope
 #: from which the tonic level counts as driven by the perturbation: half, between the hidden
 #: co-contractions' 0.27 and the multisine reflexes' 0.88 on the tuning seeds (docstring)
 MAX_PERTURBATION_SHARE = 0.5
+#: the candidates whose response to the perturbation rectifies it (a slow part that follows its
+#: speed envelope): the stretch reflex's delay -> max(dir·θ̇, 0) -> activation (module docstring)
+RECTIFYING_EFFECTS = ("reflex",)
 
 
 def perturbation_share(m: np.ndarray, v: np.ndarray, fs_hz: float, slow_hz: float) -> float:
@@ -77,3 +100,13 @@ def tonic_cue_check(trials, slow_hz: float) -> dict:
         "max_share": MAX_PERTURBATION_SHARE,
         "driven": bool(share >= MAX_PERTURBATION_SHARE),
     }
+
+
+def held_verdict(cue: dict, verdict: list[str]) -> list[str]:
+    """The named effects of ``verdict`` that a driven tonic level holds back (module docstring):
+    all of them where ``cue["driven"]`` and none is in :data:`RECTIFYING_EFFECTS`, else ``[]``
+    (also for ``["none"]`` and any verdict that already ends in ``unknown``)."""
+    named = [e for e in verdict if e not in ("none", "unknown")]
+    if not cue["driven"] or not named or "unknown" in verdict or set(named) & set(RECTIFYING_EFFECTS):
+        return []
+    return named

@@ -1,0 +1,49 @@
+"""The verdict paragraph of ``report.md`` where a driven tonic level held the verdict back
+(``results.tonic_cue.held``, :func:`.tonic_cue.held_verdict`; docs/diagnosis_schema.md)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any
+
+from armlab.diagnosis.report_text import effects_words, fmt_num, fmt_part, fmt_pct, fmt_vaf
+from armlab.protocols.joint_1dof.diagnosis.tonic_cue import RECTIFYING_EFFECTS
+
+__all__ = ["held_verdict_paragraph"]
+
+
+def held_verdict_paragraph(r: Mapping[str, Any]) -> str | None:
+    """The summary paragraph of an ``unknown`` that the tonic cue made, or None for any other."""
+    cue = r.get("tonic_cue") or {}
+    held = list(cue.get("held") or [])
+    if not held:
+        return None
+    gap = r["gap"]
+    nominal, floor = float(gap["nominal"]), float(gap["noise_floor"])
+    stages = r.get("how_far") or []
+    final = float(stages[-1]["held_out_gap"]) if stages else nominal
+    excess0 = max(nominal - floor, 0.0)
+    removed = (nominal - final) / excess0 if excess0 > 0 else 0.0
+    tried = {e["name"] for step in r.get("ranking_steps") or [] for e in step}
+    rect = [e for e in RECTIFYING_EFFECTS if e in tried]
+    rect_words = (
+        f"{effects_words(rect)} was tried and not accepted"
+        if rect
+        else f"{effects_words(list(RECTIFYING_EFFECTS))} was not among the candidates"
+    )
+    one = len(held) == 1
+    return (
+        "**Verdict: unknown — the perturbation drives a slow torque that the named effects cannot "
+        f"make.** The nominal simulation's held-out VAF is {fmt_vaf(nominal)} (gap {fmt_pct(nominal)}), "
+        f"above the noise floor {fmt_pct(floor)}. {effects_words(held).capitalize()} passed the "
+        f"acceptance rules and remove{'s' if one else ''} {fmt_part(removed)} of the gap above the floor "
+        f"(gap {fmt_pct(final)} after {'it' if one else 'them'}), but the perturbation's own slow speed "
+        f"envelope explains {fmt_num(100 * float(cue['perturbation_share']))} % of the tonic torque's "
+        f"variance (at least {fmt_num(100 * float(cue['max_share']))} % counts as driven): something "
+        "rectifies the perturbation, as a stretch reflex does, and "
+        f"{'it is' if one else 'they are'} linear, odd in the velocity or not driven by it, so "
+        f"{'it stands' if one else 'they stand'} in for the linear part of that effect. Of the "
+        f"candidates that rectify, {rect_words}. A trial of one-sided stretches (pulses in one "
+        "direction) would separate them: a rectifier answers them and their reversal differently, a "
+        "linear effect alike."
+    )
