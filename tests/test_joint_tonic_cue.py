@@ -133,3 +133,22 @@ _DRIVEN = {"driven": True}
 def test_a_driven_tonic_level_holds_back_a_verdict_that_cannot_make_it(verdict, held):
     assert held_verdict(_DRIVEN, verdict) == held
     assert held_verdict({"driven": False}, verdict) == []
+
+
+def test_a_compliance_standing_in_for_a_left_out_reflex_is_held_back(tmp_path):
+    # the ODE referee's left_out:reflex on its tuning seed 11, replicate 9 (a 28 s multisine at
+    # 1630 Hz, ENR 1.1): with the reflex left out the cuff's compliance explains all of the excess
+    # (measured 101 %), while the speed envelope explains 0.88 of the tonic level (measured): a
+    # rectified response no compliance makes, so the verdict is unknown with the cuff as its part
+    from armlab.protocols.joint_1dof.diagnosis.referee_ode import make_ode_dataset
+    from armlab.protocols.joint_1dof.diagnosis.rules import RULES
+
+    cfg = DiagnosisConfig(exclude=["reflex"])
+    ds = make_ode_dataset("left_out:reflex", 9, RefereeConfig(seed=11), cfg.with_rules(RULES), tmp_path / "d")
+    results, _ = run_diagnoser(ds.folder, "joint_1dof", cfg)
+    cue = results["tonic_cue"]
+    assert cue["driven"] and cue["held"] == ["cuff_compliance"]
+    assert results["verdict"] == ["unknown"] and results["partial"] == ["cuff_compliance"]
+    report = format_report(results, data_path="x", figures=[])
+    assert "the perturbation drives a slow torque that the named effects cannot make" in report
+    assert "A stretch reflex (`reflex`), the candidate that rectifies, was not among" in report

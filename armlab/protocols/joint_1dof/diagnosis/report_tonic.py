@@ -26,10 +26,11 @@ def held_verdict_paragraph(r: Mapping[str, Any]) -> str | None:
     removed = (nominal - final) / excess0 if excess0 > 0 else 0.0
     tried = {e["name"] for step in r.get("ranking_steps") or [] for e in step}
     rect = [e for e in RECTIFYING_EFFECTS if e in tried]
+    which = "the candidate that rectifies" if len(RECTIFYING_EFFECTS) == 1 else "the candidates that rectify"
     rect_words = (
-        f"{effects_words(rect)} was tried and not accepted"
+        f"{effects_words(rect)}, {which}, was tried and not accepted"
         if rect
-        else f"{effects_words(list(RECTIFYING_EFFECTS))} was not among the candidates"
+        else f"{effects_words(list(RECTIFYING_EFFECTS))}, {which}, was not among this diagnosis's candidates"
     )
     one = len(held) == 1
     return (
@@ -40,10 +41,11 @@ def held_verdict_paragraph(r: Mapping[str, Any]) -> str | None:
         f"(gap {fmt_pct(final)} after {'it' if one else 'them'}), but the perturbation's own slow speed "
         f"envelope explains {fmt_num(100 * float(cue['perturbation_share']))} % of the tonic torque's "
         f"variance (at least {fmt_num(100 * float(cue['max_share']))} % counts as driven): something "
-        "rectifies the perturbation, as a stretch reflex does, and "
-        f"{'it is' if one else 'they are'} linear, odd in the velocity or not driven by it, so "
-        f"{'it stands' if one else 'they stand'} in for the linear part of that effect. Of the "
-        f"candidates that rectify, {rect_words}. A trial of one-sided stretches (pulses in one "
+        "rectifies the perturbation, as a stretch reflex does, while "
+        f"{'the named effect is' if one else 'the named effects are'} linear, odd in the velocity or "
+        "not driven by the perturbation, so "
+        f"{'it stands' if one else 'they stand'} in for the linear part of that effect. "
+        f"{rect_words[0].upper()}{rect_words[1:]}. A trial of one-sided stretches (pulses in one "
         "direction) would separate them: a rectifier answers them and their reversal differently, a "
         "linear effect alike."
     )
