@@ -71,7 +71,8 @@ __all__ = [
 
 #: 1, mean share of the tonic torque's variance explained by the perturbation's speed envelope
 #: from which the tonic level counts as driven by the perturbation: half, between the hidden
-#: co-contractions' 0.27 and the multisine reflexes' 0.88 on the tuning seeds (docstring)
+#: co-contractions' 0.31 (every class no rectifier drives: 0.42) and the multisine reflexes' 0.88
+#: on the tuning seeds (docstring)
 MAX_PERTURBATION_SHARE = 0.5
 #: the candidates whose response to the perturbation rectifies it (a slow part that follows its
 #: speed envelope): the stretch reflex's delay -> max(dir·θ̇, 0) -> activation (module docstring)
