@@ -95,18 +95,19 @@ def perturbation_share(m: np.ndarray, v: np.ndarray, fs_hz: float, slow_hz: floa
 
 
 def tonic_cue_check(trials, slow_hz: float) -> dict:
-    """The check of the module docstring on prepared trials (:class:`.data.PreparedTrial`).
+    """The check of the module docstring on prepared trials (:class:`.data.PreparedTrial`), each
+    read on the samples its models are fitted and scored on (``train | held``: a start-up transient
+    at a record's ends moves the tonic level with the speed's own edge, whatever drives it).
 
     Returns:
         ``{"perturbation_share": mean over trials, "per_trial": [...], "max_share":
-        MAX_PERTURBATION_SHARE, "driven": mean >= max_share}``.
+        MAX_PERTURBATION_SHARE, "driven": mean >= max_share}`` (the diagnosis adds ``excluded``
+        and ``held``).
     """
-    # the samples the models are fitted and scored on: a start-up transient at a record's ends
-    # (the MuJoCo rig's first second) moves the tonic level with the speed's edge, whatever drives it
-    inner = [tr.train | tr.held for tr in trials]
-    per = [
-        perturbation_share(tr.m[k], tr.v[k], tr.fs_hz, slow_hz) for tr, k in zip(trials, inner, strict=True)
-    ]
+    per = []
+    for tr in trials:
+        k = tr.train | tr.held
+        per.append(perturbation_share(tr.m[k], tr.v[k], tr.fs_hz, slow_hz))
     share = float(np.mean(per))
     return {
         "perturbation_share": share,
