@@ -133,6 +133,10 @@ _DRIVEN = {"driven": True}
 def test_a_driven_tonic_level_holds_back_a_verdict_that_cannot_make_it(verdict, held):
     assert held_verdict(_DRIVEN, verdict) == held
     assert held_verdict({"driven": False}, verdict) == []
+    # a reflex that was scored: a rival at the first effect's 40 % holds as one not tried does;
+    # one that explains less alone is no rival of the named effects (it does not hold)
+    assert held_verdict(_DRIVEN, verdict, 0.4, 0.4) == held
+    assert held_verdict(_DRIVEN, verdict, 0.09, 0.4) == []
 
 
 def test_a_compliance_standing_in_for_a_left_out_reflex_is_held_back(tmp_path):

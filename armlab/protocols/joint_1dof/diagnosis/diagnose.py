@@ -48,7 +48,11 @@ from armlab.protocols.joint_1dof.diagnosis.position_sensor import (
 )
 from armlab.protocols.joint_1dof.diagnosis.rules import RULES
 from armlab.protocols.joint_1dof.diagnosis.time_varying import scan_operating_point
-from armlab.protocols.joint_1dof.diagnosis.tonic_cue import held_verdict, tonic_cue_check
+from armlab.protocols.joint_1dof.diagnosis.tonic_cue import (
+    RECTIFYING_EFFECTS,
+    held_verdict,
+    tonic_cue_check,
+)
 
 __all__ = [
     "candidate_names",
@@ -318,7 +322,9 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
         verdict, partial, grid_rest = named
     # a slow torque that the perturbation's speed drives, which no named effect can make: they stand
     # in for a rectifying effect, and the verdict is unknown (:func:`.tonic_cue.held_verdict`)
-    cue["held"] = held_verdict(cue, verdict)
+    rect = [e["explained_fraction"] for e in ranking if e["name"] in RECTIFYING_EFFECTS]
+    cue["rectifier_explained"] = max(rect) if rect else None
+    cue["held"] = held_verdict(cue, verdict, cue["rectifier_explained"], cfg.min_first_explained)
     if cue["held"]:
         verdict, partial, named = ["unknown"], [e for e in cue["held"] if e != GRID_EFFECT], None
     # below the scoring band (:mod:`.low_band`): a drift is named where the band itself needs nothing

@@ -27,8 +27,14 @@ def held_verdict_paragraph(r: Mapping[str, Any]) -> str | None:
     tried = {e["name"] for step in r.get("ranking_steps") or [] for e in step}
     rect = [e for e in RECTIFYING_EFFECTS if e in tried]
     which = "the candidate that rectifies" if len(RECTIFYING_EFFECTS) == 1 else "the candidates that rectify"
+    rival = cue.get("rectifier_explained")
+    alone = (
+        ""
+        if rival is None
+        else f" (alone it explains {fmt_part(float(rival))} of the excess: a rival in the scoring band)"
+    )
     rect_words = (
-        f"{effects_words(rect)}, {which}, was tried and not accepted"
+        f"{effects_words(rect)}, {which}, was tried and not accepted{alone}"
         if rect
         else f"{effects_words(list(RECTIFYING_EFFECTS))}, {which}, was not among this diagnosis's candidates"
     )

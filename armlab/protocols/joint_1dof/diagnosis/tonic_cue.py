@@ -117,11 +117,22 @@ def tonic_cue_check(trials, slow_hz: float) -> dict:
     }
 
 
-def held_verdict(cue: dict, verdict: list[str]) -> list[str]:
-    """The named effects of ``verdict`` that a driven tonic level holds back (module docstring):
-    all of them where ``cue["driven"]`` and none is in :data:`RECTIFYING_EFFECTS`, else ``[]``
-    (also for ``["none"]`` and any verdict that already ends in ``unknown``)."""
+def held_verdict(
+    cue: dict, verdict: list[str], rectifier_explained: float | None = None, min_rival: float = 0.4
+) -> list[str]:
+    """The named effects of ``verdict`` that a driven tonic level holds back (module docstring).
+
+    All of them where ``cue["driven"]``, none is in :data:`RECTIFYING_EFFECTS` and they may stand in
+    for one: the rectifying candidates were not tried (``rectifier_explained`` None), or the best
+    of them alone explains at least ``min_rival`` of the nominal's excess (the share a first effect
+    must explain: a rival of the named effects in the scoring band). A rectifier that was scored and
+    explains less is no rival: its slow mean may be driven while its in-band part is minor beside a
+    real effect the selection named (the ODE referee's reflex+friction, seed 1000 replicate 7: the
+    reflex 9 %, the friction 99.7 %). Else, and for ``["none"]`` and any verdict that already ends
+    in ``unknown``, ``[]``."""
     named = [e for e in verdict if e not in ("none", "unknown")]
     if not cue["driven"] or not named or "unknown" in verdict or set(named) & set(RECTIFYING_EFFECTS):
+        return []
+    if rectifier_explained is not None and rectifier_explained < min_rival:
         return []
     return named
