@@ -51,6 +51,7 @@ from armlab.protocols.joint_1dof.diagnosis.time_varying import scan_operating_po
 from armlab.protocols.joint_1dof.diagnosis.tonic_cue import (
     RECTIFYING_EFFECTS,
     held_verdict,
+    rectifier_rivals,
     tonic_cue_check,
 )
 
@@ -255,6 +256,14 @@ def _grid_named(
     return named, [], rest
 
 
+def _rectifier_explained(sel) -> float | None:
+    """The largest share of the nominal's excess a rectifying candidate explains alone at the
+    selection's first step (:data:`.tonic_cue.RECTIFYING_EFFECTS`), None where none was tried."""
+    first = sel.ranking_steps()[0] if sel.rankings else []
+    rect = [e["explained_fraction"] for e in first if e["name"] in RECTIFYING_EFFECTS]
+    return max(rect) if rect else None
+
+
 def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
     trials, hp, y_band = prepare_scoring(records, cfg)
     fs = trials[0].fs_hz
@@ -272,23 +281,40 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
     # (:mod:`.tonic_cue`): the candidate is not tried
     cue = tonic_cue_check(trials, cfg.slow_hz)
     cue["excluded"] = [_COCONTRACTION] if cue["driven"] and _COCONTRACTION in names else []
-    names = [n for n in names if n not in cue["excluded"]]
     band_share = (cfg.band_hz - cfg.highpass_hz) / (0.5 * fs)
     varying, stationary, tv_nominal = None, None, None
     if all(tr.op is not None for tr in trials):  # a time-varying recording
         varying, stationary, tv_nominal = _operating_point(trials, y_band, hp, floor, cfg, band_share)
     tv = varying is not None and varying["varies"]
-    sel = select_effects(
-        trials,
-        y_band,
-        hp,
-        {n: JOINT_SURROGATES[n] for n in names if JOINT_SURROGATES[n].kind != "low_band"},
-        floor,
-        cfg,
-        band_share=band_share,
-        family=JOINT_TV_FAMILY if tv else JOINT_FAMILY,
-        nominal=tv_nominal if tv else stationary,
-    )
+
+    def select(excluded):
+        return select_effects(
+            trials,
+            y_band,
+            hp,
+            {
+                n: JOINT_SURROGATES[n]
+                for n in names
+                if n not in excluded and JOINT_SURROGATES[n].kind != "low_band"
+            },
+            floor,
+            cfg,
+            band_share=band_share,
+            family=JOINT_TV_FAMILY if tv else JOINT_FAMILY,
+            nominal=tv_nominal if tv else stationary,
+        )
+
+    sel = select(cue["excluded"])
+    # the cue reads a rectifier; where the reflex was scored and is no rival (:func:`.tonic_cue.
+    # rectifier_rivals`), the driven tonic level is not its and the co-contraction is tried after all
+    cue["rectifier_explained"] = _rectifier_explained(sel)
+    if cue["excluded"] and not rectifier_rivals(cue["rectifier_explained"], cfg.min_first_explained):
+        cue["excluded"], cue["readmitted"] = [], [_COCONTRACTION]
+        sel = select([])
+        cue["rectifier_explained"] = _rectifier_explained(sel)
+    else:
+        cue["readmitted"] = []
+    names = [n for n in names if n not in cue["excluded"]]
     # with a time-varying nominal, the stationary one is the first stage and the time-varying one
     # the stage that adds operating_point_impedance
     models = [stationary, *sel.stages] if tv else list(sel.stages)
@@ -322,8 +348,6 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
         verdict, partial, grid_rest = named
     # a slow torque that the perturbation's speed drives, which no named effect can make: they stand
     # in for a rectifying effect, and the verdict is unknown (:func:`.tonic_cue.held_verdict`)
-    rect = [e["explained_fraction"] for e in ranking if e["name"] in RECTIFYING_EFFECTS]
-    cue["rectifier_explained"] = max(rect) if rect else None
     cue["held"] = held_verdict(cue, verdict, cue["rectifier_explained"], cfg.min_first_explained)
     if cue["held"]:
         verdict, partial, named = ["unknown"], [e for e in cue["held"] if e != GRID_EFFECT], None

@@ -66,6 +66,7 @@ __all__ = [
     "RECTIFYING_EFFECTS",
     "held_verdict",
     "perturbation_share",
+    "rectifier_rivals",
     "tonic_cue_check",
 ]
 
@@ -133,6 +134,18 @@ def held_verdict(
     named = [e for e in verdict if e not in ("none", "unknown")]
     if not cue["driven"] or not named or "unknown" in verdict or set(named) & set(RECTIFYING_EFFECTS):
         return []
-    if rectifier_explained is not None and rectifier_explained < min_rival:
+    if not rectifier_rivals(rectifier_explained, min_rival):
         return []
     return named
+
+
+def rectifier_rivals(rectifier_explained: float | None, min_rival: float = 0.4) -> bool:
+    """Whether a driven tonic level is read as a rectifier's: True where no rectifying candidate
+    was tried (``rectifier_explained`` None) or the best of them alone explains at least
+    ``min_rival`` of the nominal's excess (:func:`held_verdict`). Where one was tried and explains
+    less, the tonic level is driven but not by a rectifier the data show in band: then neither is
+    ``cocontraction_variation`` kept out (a co-contraction deep enough to change how far the servo
+    moves the joint makes the speed envelope follow its tonic torque: the ODE referee's seed 1000
+    co-contraction replicate 0, depth 0.83, share 0.71, the reflex explaining < 1 %) nor the
+    verdict held back."""
+    return rectifier_explained is None or rectifier_explained >= min_rival
