@@ -53,6 +53,18 @@ and they are kept as its partial explanation (``results.tonic_cue.held``, the re
 The threshold is the same :data:`MAX_PERTURBATION_SHARE`: above every class that no rectifier
 drives (at most 0.42, the list above) and below every multisine reflex (at least 0.88), the
 datasets where a linear effect stands in for it (docs/joint_1dof_referees.md, session 27).
+
+**Where the reflex itself was scored** (:func:`rectifier_rivals`, session 28) the cue is read as a
+rectifier's only if the reflex rivals the named effects in the scoring band: alone it explains at
+least what a first effect must (``min_first_explained``, 40 % of the nominal's excess). A reflex
+that was tried and explains less leaves the driven tonic level to something else, so neither the
+co-contraction is kept out (it is tried after all: ``results.tonic_cue.readmitted``) nor the verdict
+held back. Two evaluation datasets showed why (ODE referee, seed 1000): a reflex of gain 0.04
+N·m·s/rad beside a friction that explains 99.7 % (share 0.99, the reflex 9 %: held back, the
+friction lost), and a co-contraction of depth 0.83 under PRBS (share 0.71, the reflex < 1 %: not
+tried, ``unknown``), whose swing of stiffness changes how far the servo moves the joint, so the
+speed envelope follows the tonic torque. With the reflex left out of the candidates the cue keeps
+its session 26-27 reading.
 """
 
 from __future__ import annotations
