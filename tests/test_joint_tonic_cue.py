@@ -142,10 +142,10 @@ _DRIVEN = {"driven": True}
 def test_a_driven_tonic_level_holds_back_a_verdict_that_cannot_make_it(verdict, held):
     assert held_verdict(_DRIVEN, verdict) == held
     assert held_verdict({"driven": False}, verdict) == []
-    # a reflex that was scored: a rival at the first effect's 40 % holds as one not tried does;
-    # one that explains less alone is no rival of the named effects (it does not hold)
-    assert held_verdict(_DRIVEN, verdict, 0.4, 0.4) == held
-    assert held_verdict(_DRIVEN, verdict, 0.09, 0.4) == []
+    # a reflex that was scored: one that shows in band (the 10 % of an accepted step) holds as one
+    # not tried does; one that explains less alone does not hold
+    assert held_verdict(_DRIVEN, verdict, 0.1, 0.1) == held
+    assert held_verdict(_DRIVEN, verdict, 0.09, 0.1) == []
 
 
 def test_a_compliance_standing_in_for_a_left_out_reflex_is_held_back(tmp_path):
@@ -168,30 +168,30 @@ def test_a_compliance_standing_in_for_a_left_out_reflex_is_held_back(tmp_path):
 
 
 @pytest.mark.parametrize(
-    ("explained", "rivals"), [(None, True), (0.4, True), (0.95, True), (0.39, False), (-0.01, False)]
+    ("explained", "rivals"), [(None, True), (0.1, True), (0.95, True), (0.09, False), (-0.01, False)]
 )
-def test_a_reflex_that_was_scored_rivals_only_at_a_first_effects_share(explained, rivals):
-    assert rectifier_rivals(explained, 0.4) is rivals
+def test_a_reflex_that_was_scored_rivals_only_where_it_shows_in_band(explained, rivals):
+    assert rectifier_rivals(explained, 0.1) is rivals
 
 
-def test_a_driven_cocontraction_the_reflex_does_not_explain_is_tried(tmp_path):
-    # stiffness and damping swelling with the perturbation's own speed envelope, with a tonic torque
-    # that follows it (a co-contraction that tracks the perturbation, or a servo that yields to the
-    # subject's: the ODE referee's deep co-contraction at seed 1000): the tonic level is driven
-    # (measured share 0.94), yet the reflex candidate explains 17 % of the excess alone (measured),
-    # under the 40 % of a first effect, so the driven level is no rectifier's and the
-    # co-contraction is tried and named (it explains 88 %)
-    rng = np.random.default_rng(4)
-    x = _multisine(rng, 30.0)
+def test_a_driven_cocontraction_the_reflex_does_not_explain_is_tried():
+    # a slow co-contraction (stiffness and damping up to +-50 %, its own tonic torque) deep enough
+    # that the servo yields to it: the perturbation's amplitude falls as the joint stiffens (by up to
+    # half), so the speed envelope follows the tonic torque (the ODE referee's deep co-contraction,
+    # seed 1000). The tonic level reads as driven (measured share 0.66), yet the reflex candidate
+    # explains nothing in band (measured -3 %, under the 10 % of an accepted step): the driven level
+    # is no rectifier's, and the co-contraction is tried and named (it explains 81 %)
+    rng = np.random.default_rng(3)
+    x0 = _multisine(rng, 30.0)
+    c = _slow(rng, x0.size, JOINT_FS_HZ)
+    x = x0 * (1.0 - 0.5 * np.tanh(c))
     v, _ = joint_derivatives(x)
-    env = slow_lowpass(np.abs(v), JOINT_FS_HZ, _SLOW_HZ)
-    env = (env - env.mean()) / env.std()
-    y = nominal_torque(x) + 0.3 * env * (JOINT_K * x + JOINT_B * v) + 0.5 * env
+    y = nominal_torque(x) + 0.5 * np.tanh(c) * (JOINT_K * x + JOINT_B * v) + 0.5 * c
     recs = [JointTrial(f"rep{k}", x, y + rng.normal(0.0, 0.05, x.size)) for k in range(2)]
     cfg = DiagnosisConfig(candidates=["reflex", "cocontraction_variation", "voluntary_torque"])
     results, _ = diagnose_joint(recs, cfg)
     cue = results["tonic_cue"]
     assert cue["driven"] and cue["excluded"] == [] and cue["readmitted"] == ["cocontraction_variation"]
-    assert cue["rectifier_explained"] < 0.4 and cue["held"] == []
-    assert results["verdict"][0] == "cocontraction_variation"
+    assert cue["rectifier_explained"] < 0.1 and cue["held"] == []
+    assert results["verdict"] == ["cocontraction_variation"]
     assert "`cocontraction_variation` was tried although" in format_report(results, data_path="x", figures=[])

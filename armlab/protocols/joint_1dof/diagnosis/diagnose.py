@@ -308,7 +308,7 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
     # the cue reads a rectifier; where the reflex was scored and is no rival (:func:`.tonic_cue.
     # rectifier_rivals`), the driven tonic level is not its and the co-contraction is tried after all
     cue["rectifier_explained"] = _rectifier_explained(sel)
-    if cue["excluded"] and not rectifier_rivals(cue["rectifier_explained"], cfg.min_first_explained):
+    if cue["excluded"] and not rectifier_rivals(cue["rectifier_explained"], cfg.min_step_fraction):
         cue["excluded"], cue["readmitted"] = [], [_COCONTRACTION]
         sel = select([])
         cue["rectifier_explained"] = _rectifier_explained(sel)
@@ -348,7 +348,7 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
         verdict, partial, grid_rest = named
     # a slow torque that the perturbation's speed drives, which no named effect can make: they stand
     # in for a rectifying effect, and the verdict is unknown (:func:`.tonic_cue.held_verdict`)
-    cue["held"] = held_verdict(cue, verdict, cue["rectifier_explained"], cfg.min_first_explained)
+    cue["held"] = held_verdict(cue, verdict, cue["rectifier_explained"], cfg.min_step_fraction)
     if cue["held"]:
         verdict, partial, named = ["unknown"], [e for e in cue["held"] if e != GRID_EFFECT], None
     # below the scoring band (:mod:`.low_band`): a drift is named where the band itself needs nothing

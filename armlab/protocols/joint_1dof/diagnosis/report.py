@@ -206,9 +206,11 @@ def _which(r: Mapping[str, Any], h: str, settings: Mapping[str, Any] | None) -> 
             f"`{'`, `'.join(cue['readmitted'])}` was tried although the perturbation's own slow speed "
             f"envelope explains {fmt_num(100 * float(cue['perturbation_share']))} % of the tonic torque's "
             f"variance: the stretch reflex, the candidate that rectifies, explains only "
-            f"{fmt_part(float(cue['rectifier_explained']))} of the excess alone, so the driven tonic "
-            "level is not read as a reflex's mean (a co-contraction deep enough to change how far the "
-            "perturbation moves the joint makes the speed envelope follow the tonic torque).",
+            f"{fmt_part(float(cue['rectifier_explained']))} of the excess alone (under the "
+            f"{100 * float(s.get('min_step_fraction', 0.1)):.0f} % any accepted effect must), so the "
+            "driven tonic level is not read as a reflex's mean (a co-contraction deep enough to "
+            "change how far the perturbation moves the joint makes the speed envelope follow the "
+            "tonic torque).",
         ]
     for step, entries in enumerate(r.get("ranking_steps") or [r.get("ranking") or []]):
         base = stage_name(effects[:step])

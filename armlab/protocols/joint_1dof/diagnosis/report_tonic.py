@@ -31,7 +31,7 @@ def held_verdict_paragraph(r: Mapping[str, Any]) -> str | None:
     alone = (
         ""
         if rival is None
-        else f" (alone it explains {fmt_part(float(rival))} of the excess: a rival in the scoring band)"
+        else f" (alone it explains {fmt_part(float(rival))} of the excess: it shows in the scoring band)"
     )
     rect_words = (
         f"{effects_words(rect)}, {which}, was tried and not accepted{alone}"

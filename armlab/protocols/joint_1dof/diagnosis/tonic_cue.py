@@ -55,16 +55,20 @@ drives (at most 0.42, the list above) and below every multisine reflex (at least
 datasets where a linear effect stands in for it (docs/joint_1dof_referees.md, session 27).
 
 **Where the reflex itself was scored** (:func:`rectifier_rivals`, session 28) the cue is read as a
-rectifier's only if the reflex rivals the named effects in the scoring band: alone it explains at
-least what a first effect must (``min_first_explained``, 40 % of the nominal's excess). A reflex
-that was tried and explains less leaves the driven tonic level to something else, so neither the
-co-contraction is kept out (it is tried after all: ``results.tonic_cue.readmitted``) nor the verdict
-held back. Two evaluation datasets showed why (ODE referee, seed 1000): a reflex of gain 0.04
-N·m·s/rad beside a friction that explains 99.7 % (share 0.99, the reflex 9 %: held back, the
-friction lost), and a co-contraction of depth 0.83 under PRBS (share 0.71, the reflex < 1 %: not
-tried, ``unknown``), whose swing of stiffness changes how far the servo moves the joint, so the
-speed envelope follows the tonic torque. With the reflex left out of the candidates the cue keeps
-its session 26-27 reading.
+rectifier's only if the reflex shows in the scoring band: alone it explains at least what any
+accepted step must (``min_step_fraction``, 10 % of the nominal's excess). A reflex that was tried
+and explains less leaves the driven tonic level to something else, so neither the co-contraction
+is kept out (it is tried after all: ``results.tonic_cue.readmitted``) nor the verdict held back.
+Evaluation datasets showed why (ODE referee, seed 1000): a reflex of gain 0.04 N·m·s/rad beside a
+friction that explains 99.7 % (share 0.99, the reflex 9 %: held back, the friction lost), and a
+co-contraction of depth 0.83 under PRBS (share 0.71, the reflex < 1 %: not tried, ``unknown``),
+whose swing of stiffness changes how far the servo moves the joint, so the speed envelope follows
+the tonic torque. A first version used a first effect's 40 % (``min_first_explained``); on the
+fresh seed 2000 it readmitted the co-contraction beside two weak real reflexes under multisines
+(reflex+friction, the reflex 29 % and 11 % alone) where it stood in for them, as in session 26;
+the readmitted datasets without a reflex scored 0.0 there (seeds 1000 and 2000 both read for
+this: evaluated on seed 3000). With the reflex left out of the candidates the cue keeps its
+session 26-27 reading.
 """
 
 from __future__ import annotations
@@ -131,18 +135,18 @@ def tonic_cue_check(trials, slow_hz: float) -> dict:
 
 
 def held_verdict(
-    cue: dict, verdict: list[str], rectifier_explained: float | None = None, min_rival: float = 0.4
+    cue: dict, verdict: list[str], rectifier_explained: float | None = None, min_rival: float = 0.1
 ) -> list[str]:
     """The named effects of ``verdict`` that a driven tonic level holds back (module docstring).
 
     All of them where ``cue["driven"]``, none is in :data:`RECTIFYING_EFFECTS` and they may stand in
     for one: the rectifying candidates were not tried (``rectifier_explained`` None), or the best
-    of them alone explains at least ``min_rival`` of the nominal's excess (the share a first effect
-    must explain: a rival of the named effects in the scoring band). A rectifier that was scored and
-    explains less is no rival: its slow mean may be driven while its in-band part is minor beside a
-    real effect the selection named (the ODE referee's reflex+friction, seed 1000 replicate 7: the
-    reflex 9 %, the friction 99.7 %). Else, and for ``["none"]`` and any verdict that already ends
-    in ``unknown``, ``[]``."""
+    of them alone explains at least ``min_rival`` of the nominal's excess (the share any accepted
+    effect's step must reach, ``min_step_fraction``: a rectifier present in the scoring band). A
+    rectifier that was scored and explains less is absent there: the driven slow level is then not
+    its, or its in-band part is negligible beside a real effect the selection named (the ODE
+    referee's reflex+friction, seed 1000 replicate 7: the reflex 9 %, the friction 99.7 %). Else,
+    and for ``["none"]`` and any verdict that already ends in ``unknown``, ``[]``."""
     named = [e for e in verdict if e not in ("none", "unknown")]
     if not cue["driven"] or not named or "unknown" in verdict or set(named) & set(RECTIFYING_EFFECTS):
         return []
@@ -151,7 +155,7 @@ def held_verdict(
     return named
 
 
-def rectifier_rivals(rectifier_explained: float | None, min_rival: float = 0.4) -> bool:
+def rectifier_rivals(rectifier_explained: float | None, min_rival: float = 0.1) -> bool:
     """Whether a driven tonic level is read as a rectifier's: True where no rectifying candidate
     was tried (``rectifier_explained`` None) or the best of them alone explains at least
     ``min_rival`` of the nominal's excess (:func:`held_verdict`). Where one was tried and explains
