@@ -51,7 +51,6 @@ from armlab.protocols.joint_1dof.diagnosis.time_varying import scan_operating_po
 from armlab.protocols.joint_1dof.diagnosis.tonic_cue import (
     RECTIFYING_EFFECTS,
     held_verdict,
-    rectifier_rivals,
     tonic_cue_check,
 )
 
@@ -305,15 +304,8 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
         )
 
     sel = select(cue["excluded"])
-    # the cue reads a rectifier; where the reflex was scored and is no rival (:func:`.tonic_cue.
-    # rectifier_rivals`), the driven tonic level is not its and the co-contraction is tried after all
+    # where the reflex was scored, how much it explains alone (:func:`.tonic_cue.rectifier_rivals`)
     cue["rectifier_explained"] = _rectifier_explained(sel)
-    if cue["excluded"] and not rectifier_rivals(cue["rectifier_explained"], cfg.min_step_fraction):
-        cue["excluded"], cue["readmitted"] = [], [_COCONTRACTION]
-        sel = select([])
-        cue["rectifier_explained"] = _rectifier_explained(sel)
-    else:
-        cue["readmitted"] = []
     names = [n for n in names if n not in cue["excluded"]]
     # with a time-varying nominal, the stationary one is the first stage and the time-varying one
     # the stage that adds operating_point_impedance

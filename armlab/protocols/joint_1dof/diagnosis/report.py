@@ -24,7 +24,6 @@ from armlab.diagnosis.report_text import (
     finite_or_none,
     fmt_ms,
     fmt_num,
-    fmt_part,
     fmt_pct,
     fmt_ratio,
     fmt_score,
@@ -199,18 +198,6 @@ def _which(r: Mapping[str, Any], h: str, settings: Mapping[str, Any] | None) -> 
             f"(at least {fmt_num(100 * float(cue['max_share']))} % counts as driven by the perturbation), so "
             "the tonic level is a response to the perturbation (e.g. a stretch reflex's mean), not the "
             "subject's co-contraction that candidate reads from it.",
-        ]
-    if cue.get("readmitted"):
-        out += [
-            "",
-            f"`{'`, `'.join(cue['readmitted'])}` was tried although the perturbation's own slow speed "
-            f"envelope explains {fmt_num(100 * float(cue['perturbation_share']))} % of the tonic torque's "
-            f"variance: the stretch reflex, the candidate that rectifies, explains only "
-            f"{fmt_part(float(cue['rectifier_explained']))} of the excess alone (under the "
-            f"{100 * float(s.get('min_step_fraction', 0.1)):.0f} % any accepted effect must), so the "
-            "driven tonic level is not read as a reflex's mean (a co-contraction deep enough to "
-            "change how far the perturbation moves the joint makes the speed envelope follow the "
-            "tonic torque).",
         ]
     for step, entries in enumerate(r.get("ranking_steps") or [r.get("ranking") or []]):
         base = stage_name(effects[:step])

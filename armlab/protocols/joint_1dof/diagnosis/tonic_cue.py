@@ -54,21 +54,18 @@ The threshold is the same :data:`MAX_PERTURBATION_SHARE`: above every class that
 drives (at most 0.42, the list above) and below every multisine reflex (at least 0.88), the
 datasets where a linear effect stands in for it (docs/joint_1dof_referees.md, session 27).
 
-**Where the reflex itself was scored** (:func:`rectifier_rivals`, session 28) the cue is read as a
-rectifier's only if the reflex shows in the scoring band: alone it explains at least what any
-accepted step must (``min_step_fraction``, 10 % of the nominal's excess). A reflex that was tried
-and explains less leaves the driven tonic level to something else, so neither the co-contraction
-is kept out (it is tried after all: ``results.tonic_cue.readmitted``) nor the verdict held back.
-Evaluation datasets showed why (ODE referee, seed 1000): a reflex of gain 0.04 N·m·s/rad beside a
-friction that explains 99.7 % (share 0.99, the reflex 9 %: held back, the friction lost), and a
-co-contraction of depth 0.83 under PRBS (share 0.71, the reflex < 1 %: not tried, ``unknown``),
-whose swing of stiffness changes how far the servo moves the joint, so the speed envelope follows
-the tonic torque. A first version used a first effect's 40 % (``min_first_explained``); on the
-fresh seed 2000 it readmitted the co-contraction beside two weak real reflexes under multisines
-(reflex+friction, the reflex 29 % and 11 % alone) where it stood in for them, as in session 26;
-the readmitted datasets without a reflex scored 0.0 there (seeds 1000 and 2000 both read for
-this: evaluated on seed 3000). With the reflex left out of the candidates the cue keeps its
-session 26-27 reading.
+**Where the reflex itself was scored** (:func:`rectifier_rivals`, session 28) a verdict is held
+back only if the reflex shows in the scoring band: alone it explains at least what any accepted
+step must (``min_step_fraction``, 10 % of the nominal's excess). A reflex that was tried and
+explains less is negligible beside the effects the selection named (the ODE referee's
+reflex+friction, seed 1000 replicate 7: a reflex of 0.04 N·m·s/rad explaining 9 %, the friction
+99.7 %, share 0.99: held back as ``unknown``, the friction lost). A first version also tried
+``cocontraction_variation`` there after all; on seeds 1000 and 2000 it gained two deep
+co-contractions (whose swing of stiffness changes how far the servo moves the joint, so the
+speed envelope follows the tonic torque) and lost two weak real reflexes beside a friction, where
+the co-contraction stood in for them as in session 26: a wrong name for an ``unknown``, so the
+co-contraction stays out (docs/joint_1dof_referees.md, session 28). With the reflex left out of
+the candidates nothing changes.
 """
 
 from __future__ import annotations
@@ -158,10 +155,5 @@ def held_verdict(
 def rectifier_rivals(rectifier_explained: float | None, min_rival: float = 0.1) -> bool:
     """Whether a driven tonic level is read as a rectifier's: True where no rectifying candidate
     was tried (``rectifier_explained`` None) or the best of them alone explains at least
-    ``min_rival`` of the nominal's excess (:func:`held_verdict`). Where one was tried and explains
-    less, the tonic level is driven but not by a rectifier the data show in band: then neither is
-    ``cocontraction_variation`` kept out (a co-contraction deep enough to change how far the servo
-    moves the joint makes the speed envelope follow its tonic torque: the ODE referee's seed 1000
-    co-contraction replicate 0, depth 0.83, share 0.71, the reflex explaining < 1 %) nor the
-    verdict held back."""
+    ``min_rival`` of the nominal's excess (:func:`held_verdict`)."""
     return rectifier_explained is None or rectifier_explained >= min_rival
