@@ -286,24 +286,21 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
         varying, stationary, tv_nominal = _operating_point(trials, y_band, hp, floor, cfg, band_share)
     tv = varying is not None and varying["varies"]
 
-    def select(excluded):
-        return select_effects(
-            trials,
-            y_band,
-            hp,
-            {
-                n: JOINT_SURROGATES[n]
-                for n in names
-                if n not in excluded and JOINT_SURROGATES[n].kind != "low_band"
-            },
-            floor,
-            cfg,
-            band_share=band_share,
-            family=JOINT_TV_FAMILY if tv else JOINT_FAMILY,
-            nominal=tv_nominal if tv else stationary,
-        )
-
-    sel = select(cue["excluded"])
+    sel = select_effects(
+        trials,
+        y_band,
+        hp,
+        {
+            n: JOINT_SURROGATES[n]
+            for n in names
+            if n not in cue["excluded"] and JOINT_SURROGATES[n].kind != "low_band"
+        },
+        floor,
+        cfg,
+        band_share=band_share,
+        family=JOINT_TV_FAMILY if tv else JOINT_FAMILY,
+        nominal=tv_nominal if tv else stationary,
+    )
     # where the reflex was scored, how much it explains alone (:func:`.tonic_cue.rectifier_rivals`)
     cue["rectifier_explained"] = _rectifier_explained(sel)
     names = [n for n in names if n not in cue["excluded"]]
