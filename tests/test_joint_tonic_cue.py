@@ -6,12 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from conftest import (
-    JOINT_FS_HZ,
-    JointTrial,
-    nominal_torque,
-    reflex_torque,
-)
+from conftest import JOINT_FS_HZ, JointTrial, nominal_torque, reflex_torque
 from scipy import signal
 
 from armlab.config.diagnosis import DiagnosisConfig, RefereeConfig

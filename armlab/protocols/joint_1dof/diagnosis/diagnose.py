@@ -255,14 +255,6 @@ def _grid_named(
     return named, [], rest
 
 
-def _rectifier_explained(sel) -> float | None:
-    """The largest share of the nominal's excess a rectifying candidate explains alone at the
-    selection's first step (:data:`.tonic_cue.RECTIFYING_EFFECTS`), None where none was tried."""
-    first = sel.ranking_steps()[0] if sel.rankings else []
-    rect = [e["explained_fraction"] for e in first if e["name"] in RECTIFYING_EFFECTS]
-    return max(rect) if rect else None
-
-
 def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
     trials, hp, y_band = prepare_scoring(records, cfg)
     fs = trials[0].fs_hz
@@ -280,30 +272,23 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
     # (:mod:`.tonic_cue`): the candidate is not tried
     cue = tonic_cue_check(trials, cfg.slow_hz)
     cue["excluded"] = [_COCONTRACTION] if cue["driven"] and _COCONTRACTION in names else []
+    names = [n for n in names if n not in cue["excluded"]]
     band_share = (cfg.band_hz - cfg.highpass_hz) / (0.5 * fs)
     varying, stationary, tv_nominal = None, None, None
     if all(tr.op is not None for tr in trials):  # a time-varying recording
         varying, stationary, tv_nominal = _operating_point(trials, y_band, hp, floor, cfg, band_share)
     tv = varying is not None and varying["varies"]
-
     sel = select_effects(
         trials,
         y_band,
         hp,
-        {
-            n: JOINT_SURROGATES[n]
-            for n in names
-            if n not in cue["excluded"] and JOINT_SURROGATES[n].kind != "low_band"
-        },
+        {n: JOINT_SURROGATES[n] for n in names if JOINT_SURROGATES[n].kind != "low_band"},
         floor,
         cfg,
         band_share=band_share,
         family=JOINT_TV_FAMILY if tv else JOINT_FAMILY,
         nominal=tv_nominal if tv else stationary,
     )
-    # where the reflex was scored, how much it explains alone (:func:`.tonic_cue.rectifier_rivals`)
-    cue["rectifier_explained"] = _rectifier_explained(sel)
-    names = [n for n in names if n not in cue["excluded"]]
     # with a time-varying nominal, the stationary one is the first stage and the time-varying one
     # the stage that adds operating_point_impedance
     models = [stationary, *sel.stages] if tv else list(sel.stages)
@@ -319,6 +304,9 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
     ]
     steps = sel.ranking_steps()
     ranking = steps[0] if steps else []
+    # where the reflex was scored, the most a rectifier explains alone (:func:`.tonic_cue.rectifier_rivals`)
+    rect = [e["explained_fraction"] for e in ranking if e["name"] in RECTIFYING_EFFECTS]
+    cue["rectifier_explained"] = max(rect) if rect else None
     verdict, partial = sel.verdict, sel.partial
     if tv:
         # the time-varying nominal is the first accepted effect: the core's rule for the effects
