@@ -31,7 +31,7 @@ from armlab import progress
 from armlab.config.diagnosis import DiagnosisConfig
 from armlab.config.effects import EFFECTS
 from armlab.cpus import single_threaded_blas, usable_cpus
-from armlab.diagnosis.families import FittedModel, ModelFamily, Surrogate, fit_model
+from armlab.diagnosis.families import FittedModel, ModelFamily, Surrogate, active_params, fit_model
 from armlab.errors import ConfigError
 
 __all__ = [
@@ -226,6 +226,7 @@ def select_effects(
                     dp = fm.n_params - current.n_params if counted is None else counted
                     dbic = delta_bic(rss, rss_c, dp, n_eff)
                     entries.append(_entry(name, gap_c, gap, dbic, dp, excess0, fm))
+                    entries[-1]["params"] = active_params(fm.theta, (*selected, candidates[name]))
                     progress.advance()
             except BaseException:  # an interrupt: the fits not started are dropped, not waited for
                 pool.shutdown(cancel_futures=True)

@@ -29,6 +29,7 @@ __all__ = [
     "ModelFamily",
     "NLParam",
     "Surrogate",
+    "active_params",
     "fit_model",
     "lowpass2",
     "padded_length",
@@ -40,7 +41,12 @@ __all__ = [
 
 @dataclass(frozen=True)
 class NLParam:
-    """A nonlinear parameter: name (unit in it), bounds, log scaling, start grid, discrete flag."""
+    """A nonlinear parameter: name (unit in it), bounds, log scaling, start grid, discrete flag.
+
+    ``active_when``: ``(name, value)`` of a discrete parameter of the same surrogate that selects
+    a form in which this parameter acts; in the other forms it is kept at its first grid value,
+    neither searched nor refined nor counted.
+    """
 
     name: str
     lower: float
@@ -48,6 +54,7 @@ class NLParam:
     grid: tuple[float, ...]
     log: bool = False
     discrete: bool = False
+    active_when: tuple[str, float] | None = None
 
 
 @dataclass(frozen=True)
@@ -310,18 +317,22 @@ def fit_model(
     for k, p in todo:
         if not p.grid:
             theta[k] = float(np.sqrt(p.lower * p.upper)) if p.log else 0.5 * (p.lower + p.upper)
+    all_params = {f"{s.name}.{p.name}": p for s in model for p in s.params}
     if gridded:
         keys = [k for k, _ in gridded]
         mesh = np.array(np.meshgrid(*[p.grid for _, p in gridded], indexing="ij")).reshape(len(keys), -1).T
-        best = (np.inf, None)
+        best, seen = (np.inf, None), set()
         for row in mesh:
-            trial_theta = {**theta, **dict(zip(keys, map(float, row), strict=True))}
+            trial_theta = _canonical({**theta, **dict(zip(keys, map(float, row), strict=True))}, all_params)
+            row_key = tuple(trial_theta[k] for k in keys)
+            if row_key in seen:  # a row that differs only in a parameter its form does not use
+                continue
+            seen.add(row_key)
             cost = float(np.sum(prob.train_residual(trial_theta) ** 2))
             if cost < best[0]:
                 best = (cost, trial_theta)
         theta = best[1]
-    all_params = {f"{s.name}.{p.name}": p for s in model for p in s.params}
-    free = [k for k, p in all_params.items() if not p.discrete]
+    free = [k for k, p in all_params.items() if not p.discrete and _active(k, p, theta)]
     if free:
         theta = _refine(prob, theta, free, all_params)
     phis, betas, res = prob.solve(theta)
@@ -335,6 +346,28 @@ def fit_model(
         residuals=tuple(res),
         n_params=n_lin * len(trials) + len(free),
     )
+
+
+def _active(key: str, p: NLParam, theta: dict[str, float]) -> bool:
+    """Whether ``p`` (full name ``key``) acts in the form ``theta`` selects (:class:`NLParam`)."""
+    if p.active_when is None:
+        return True
+    name, value = p.active_when
+    return theta[f"{key.rsplit('.', 1)[0]}.{name}"] == value
+
+
+def active_params(theta: dict[str, float], model: tuple[Surrogate, ...]) -> dict[str, float]:
+    """``theta`` less the parameters of the forms ``model`` did not take (what a report shows)."""
+    params = {f"{s.name}.{p.name}": p for s in model for p in s.params}
+    return {k: v for k, v in theta.items() if k not in params or _active(k, params[k], theta)}
+
+
+def _canonical(theta: dict[str, float], params: dict[str, NLParam]) -> dict[str, float]:
+    """``theta`` with every parameter its form does not use at its first grid value."""
+    for k, p in params.items():
+        if k in theta and not _active(k, p, theta):
+            theta[k] = float(p.grid[0])
+    return theta
 
 
 def _refine(prob: _Problem, theta: dict, free: list[str], params: dict[str, NLParam]) -> dict:
