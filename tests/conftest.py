@@ -146,6 +146,17 @@ def friction_torque(x: np.ndarray, *, coulomb: float) -> np.ndarray:
     return -coulomb * np.sign(v)
 
 
+def presliding_friction_torque(x: np.ndarray, *, coulomb: float, presliding_rad: float) -> np.ndarray:
+    """N·m, a bristle (LuGre without Stribeck or micro-damping, i.e. Dahl) friction, stepped
+    sample by sample: the deflection z follows dz = dx - |dx|·z / z_max and is held at rest;
+    the force is -coulomb·z / z_max, z_max = presliding_rad."""
+    z, out = 0.0, np.empty(x.size)
+    for k, dx in enumerate(np.diff(x, prepend=x[0])):
+        z += dx - abs(dx) * z / presliding_rad
+        out[k] = -coulomb * z / presliding_rad
+    return out
+
+
 def delayed(z: np.ndarray, delay_s: float) -> np.ndarray:
     """z(t - delay_s), the channel at rest (its first value) before the start."""
     t = np.arange(z.size) / JOINT_FS_HZ

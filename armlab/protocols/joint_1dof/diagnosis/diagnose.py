@@ -21,7 +21,7 @@ from armlab.diagnosis.attribution import (
     select_effects,
     step_accepted,
 )
-from armlab.diagnosis.families import FittedModel, fit_model
+from armlab.diagnosis.families import FittedModel, active_params, fit_model
 from armlab.diagnosis.localise import band_breakdown, frf_parameters, residual_tests, window_breakdown
 from armlab.diagnosis.summary import gap_section, stage_entry
 from armlab.dsp import zero_phase
@@ -95,7 +95,9 @@ def _stage(model, trials, y_band, noise, floor, sign, frf_meas) -> dict:
         "bands": band_breakdown(trials, y_band, model.residuals, noise),
         "windows": window_breakdown(trials, y_band, model.residuals, noise.variance_Nm2),
         "parameters": _impedance(model, sign),
-        "nonlinear_parameters": dict(model.theta),
+        "nonlinear_parameters": active_params(
+            model.theta, tuple(JOINT_SURROGATES[e] for e in model.effects if e in JOINT_SURROGATES)
+        ),
         "frf_bias": [
             {k: m[k] - s[k] for k in ("I", "B", "K")} | {"measured": m, "simulated": s}
             for m, s in zip(frf_meas, frf_sim, strict=True)

@@ -62,6 +62,11 @@ __all__ = [
 ]
 
 
+FRICTION_COULOMB = 0.0  # joint_friction.form: tanh(v / velocity), relaxing at rest (_friction)
+FRICTION_DAHL = 1.0  # joint_friction.form: Dahl's presliding, held at rest (_dahl)
+_COULOMB, _DAHL = ("form", FRICTION_COULOMB), ("form", FRICTION_DAHL)
+
+
 def _friction(v: np.ndarray, velocity: float, release_s: float, fs: float) -> np.ndarray:
     """Coulomb friction, ``tanh(v / velocity)`` while sliding, relaxing with ``release_s`` at rest.
 
@@ -83,6 +88,34 @@ def _friction(v: np.ndarray, velocity: float, release_s: float, fs: float) -> np
     out = s[j] * np.exp(-(k - j) * rate)
     out[~np.isfinite(best)] = 0.0  # nothing has moved yet
     return out
+
+
+def _dahl(v: np.ndarray, presliding_rad: float, fs: float) -> np.ndarray:
+    """Dahl's presliding friction, normalised to ±1: ``ds/dx = (sgn(dx) - s) / presliding_rad``.
+
+    Rate-independent (Dahl 1968; Olsson et al. 1998, Eur. J. Control 4:176, Sec. 3.3): after each
+    reversal the force builds over a few ``presliding_rad`` of travel towards the sliding level,
+    and it is held while the joint rests (the bristles stay deflected), where the smoothed Coulomb
+    law of :func:`_friction` follows the velocity. Exact for a direction constant within each
+    sample: over a travel ``|dx|``, ``s`` moves towards ``sgn(dx)`` by ``1 - exp(-|dx| / x_p)``.
+    The recursion runs over the runs of one direction (one scalar step per reversal), then every
+    sample is filled from its run's start at once.
+    """
+    dx = v / fs
+    d = np.sign(dx)
+    moving = np.flatnonzero(d)
+    if moving.size == 0:
+        return np.zeros_like(dx)
+    # a rest keeps the last direction (nothing moves, so nothing changes there either)
+    d = d[moving[np.maximum(np.searchsorted(moving, np.arange(d.size), side="right") - 1, 0)]]
+    travel = np.r_[0.0, np.cumsum(np.abs(dx))]  # rad of path before each sample, then after it
+    starts = np.r_[0, np.flatnonzero(np.diff(d)) + 1]
+    decay = np.exp(-np.diff(travel[np.r_[starts, d.size]]) / presliding_rad).tolist()
+    s0 = [0.0] * starts.size  # s at each run's start
+    for k, (dk, ek) in enumerate(zip(d[starts[:-1]].tolist(), decay[:-1], strict=True)):
+        s0[k + 1] = dk - (dk - s0[k]) * ek
+    run = np.repeat(np.arange(starts.size), np.diff(np.r_[starts, d.size]))
+    return d - (d - np.asarray(s0)[run]) * np.exp(-(travel[1:] - travel[starts][run]) / presliding_rad)
 
 
 @lru_cache(maxsize=64)  # 6 trials x the delays in flight (the grid's 23, a few refinements)
@@ -109,7 +142,12 @@ def _effect_column(tr: PreparedTrial, name: str, values: tuple[float, ...]) -> n
         stretch = np.maximum(s * _delayed_velocity(tr, d), 0.0)
         out = s * lowpass2(stretch, cutoff, zeta, tr.fs_hz)
     elif name == "joint_friction":
-        out = tr.to_fit_rate(_friction(tr.v_raw, *values, tr.raw_fs_hz))
+        form, velocity, release_s, presliding = values
+        if form == FRICTION_DAHL:
+            raw = _dahl(tr.v_raw, presliding, tr.raw_fs_hz)
+        else:
+            raw = _friction(tr.v_raw, velocity, release_s, tr.raw_fs_hz)
+        out = tr.to_fit_rate(raw)
     elif name == "local":
         out = _local_columns(tr)
     else:  # a compliance: (tau2, tau1, ratio, zeta)
@@ -173,7 +211,9 @@ def _columns(
         )
         cols.append(_effect_column(tr, "reflex", values))
     if "joint_friction" in names:
-        values = (theta["joint_friction.velocity_rad_s"], theta["joint_friction.release_s"])
+        values = tuple(
+            theta[f"joint_friction.{k}"] for k in ("form", "velocity_rad_s", "release_s", "presliding_rad")
+        )
         cols.append(_effect_column(tr, "joint_friction", values))
     if "cocontraction_variation" in names:
         local = _effect_column(tr, "local", ())
@@ -223,8 +263,15 @@ JOINT_SURROGATES: dict[str, Surrogate] = {
             "joint_friction",
             "additive",
             (
-                NLParam("velocity_rad_s", 1e-3, 0.5, (0.003, 0.01, 0.03), log=True),
-                NLParam("release_s", 0.002, 0.3, (0.004, 0.02, 0.05, 0.1), log=True),
+                # the law's form: 0 a Coulomb force smoothed in velocity, its held force relaxing at
+                # rest (the MuJoCo rig's constraint friction); 1 Dahl's presliding, smoothed in
+                # displacement and held at rest (a LuGre-type contact: the ODE referee's friction,
+                # whose held force under smoothed steps the first form could not keep)
+                NLParam("form", 0.0, 1.0, (FRICTION_COULOMB, FRICTION_DAHL), discrete=True),
+                NLParam("velocity_rad_s", 1e-3, 0.5, (0.003, 0.01, 0.03), log=True, active_when=_COULOMB),
+                NLParam("release_s", 0.002, 0.3, (0.004, 0.02, 0.05, 0.1), log=True, active_when=_COULOMB),
+                # rad: a bristle deflection of 0.03-3 mrad (the ODE referee draws 0.2-1 mrad)
+                NLParam("presliding_rad", 3e-5, 3e-3, (1e-4, 3e-4, 1e-3), log=True, active_when=_DAHL),
             ),
             ("coulomb",),
         ),
