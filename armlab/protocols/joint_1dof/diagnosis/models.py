@@ -270,7 +270,8 @@ JOINT_SURROGATES: dict[str, Surrogate] = {
                 NLParam("form", 0.0, 1.0, (FRICTION_COULOMB, FRICTION_DAHL), discrete=True),
                 NLParam("velocity_rad_s", 1e-3, 0.5, (0.003, 0.01, 0.03), log=True, active_when=_COULOMB),
                 NLParam("release_s", 0.002, 0.3, (0.004, 0.02, 0.05, 0.1), log=True, active_when=_COULOMB),
-                # rad: a bristle deflection of 0.03-3 mrad (the ODE referee draws 0.2-1 mrad)
+                # rad: a presliding travel of 0.03-3 mrad (an assumption, a decade either side of the
+                # grid's middle; the ODE referee draws 0.2-1 mrad)
                 NLParam("presliding_rad", 3e-5, 3e-3, (1e-4, 3e-4, 1e-3), log=True, active_when=_DAHL),
             ),
             ("coulomb",),
