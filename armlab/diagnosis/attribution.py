@@ -225,8 +225,8 @@ def select_effects(
                     counted = candidates[name].counts_as
                     dp = fm.n_params - current.n_params if counted is None else counted
                     dbic = delta_bic(rss, rss_c, dp, n_eff)
-                    entries.append(_entry(name, gap_c, gap, dbic, dp, excess0, fm))
-                    entries[-1]["params"] = active_params(fm.theta, (*selected, candidates[name]))
+                    shown = active_params(fm.theta, (*selected, candidates[name]))
+                    entries.append(_entry(name, gap_c, gap, dbic, dp, excess0, fm, params=shown))
                     progress.advance()
             except BaseException:  # an interrupt: the fits not started are dropped, not waited for
                 pool.shutdown(cancel_futures=True)
@@ -276,7 +276,8 @@ def select_effects(
     )
 
 
-def _entry(name, gap_before, gap, dbic, dp, excess0, model, identifiable=True) -> dict:
+def _entry(name, gap_before, gap, dbic, dp, excess0, model, identifiable=True, params=None) -> dict:
+    """One ranking row; ``params``: the parameters to show (default: all of ``model``'s)."""
     red = gap_before - gap
     return {
         "name": name,
@@ -286,6 +287,6 @@ def _entry(name, gap_before, gap, dbic, dp, excess0, model, identifiable=True) -
         "delta_bic": dbic,
         "added_params": dp,
         "identifiable": identifiable,
-        "params": dict(model.theta) if model is not None else {},
+        "params": params if params is not None else (dict(model.theta) if model is not None else {}),
         "model": model,
     }
