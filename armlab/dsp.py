@@ -10,7 +10,8 @@ One place for every filter armlab designs or applies to a sampled signal:
   to filter a whole record);
 - Savitzky-Golay smoothing and derivatives (:func:`savgol`, :func:`savgol_taps`);
 - five-point central differences for first and second derivatives
-  (:func:`five_point_derivatives`).
+  (:func:`five_point_derivatives`);
+- the step of the grid a quantised recording lies on (:func:`grid_step`).
 
 Every function is a thin, documented layer over ``scipy.signal`` or NumPy: the exact call
 sequence is part of the contract (armlab's recorded results are reproduced bit for bit), so a
@@ -37,6 +38,7 @@ __all__ = [
     "by_row_halves",
     "butterworth",
     "five_point_derivatives",
+    "grid_step",
     "lowpass_causal",
     "lowpass_zero_phase",
     "savgol",
@@ -380,6 +382,34 @@ def five_point_derivatives(x: np.ndarray, fs_hz: float, axis: int = -2) -> tuple
     xd[2:-2] = (-xm[4:] + 8.0 * xm[3:-1] - 8.0 * xm[1:-3] + xm[:-4]) / (12.0 * dt)
     xdd[2:-2] = (-xm[4:] + 16.0 * xm[3:-1] - 30.0 * xm[2:-2] + 16.0 * xm[1:-3] - xm[:-4]) / (12.0 * dt * dt)
     return np.moveaxis(xd, 0, axis), np.moveaxis(xdd, 0, axis)
+
+
+_GRID_TOL = 0.01  # of a step: a change within this of a whole number of steps is on the grid
+_GRID_SHARE = 0.99  # of the changes that must be on the grid
+_MIN_CHANGES = 20  # changes needed to read a grid at all
+# changes below this fraction of the largest |value| are the file's rounding (CSV: %.9g keeps
+# 5e-9 of a value), not the sensor's: they are taken as no change
+_ROUNDING = 1e-8
+
+
+def grid_step(x_raw: np.ndarray) -> float:
+    """The step of the grid a recorded signal lies on (its unit: an encoder's angle, a converter's
+    torque), or 0.0 if it lies on none.
+
+    The smallest changes between samples are the step (their mean within 1.5 of the smallest);
+    the signal is on that grid when at least ``_GRID_SHARE`` of all changes are whole multiples
+    of it within ``_GRID_TOL`` of a step (a grid offset cancels in the differences).
+    """
+    x = np.asarray(x_raw, float)
+    d = np.abs(np.diff(x))
+    d = d[d > _ROUNDING * max(float(np.max(np.abs(x))), 1e-300)]
+    if d.size < _MIN_CHANGES:
+        return 0.0
+    q0 = float(np.min(d))
+    q = float(np.mean(d[d < 1.5 * q0]))
+    r = d / q
+    on = np.abs(r - np.round(r)) < _GRID_TOL
+    return q if np.mean(on) >= _GRID_SHARE else 0.0
 
 
 def by_row_halves(fill: Callable[[slice], None], n_rows: int) -> None:

@@ -163,7 +163,10 @@ def low_band_check(
             "captured_power_Nm2": captured / n_tot,
             "noise_power_Nm2": noise_cap / n_tot,
             "threshold_power_Nm2": threshold / n_tot,
-            "enr": float(np.sqrt(max(drift_excess, 0.0) / noise_cap)),
+            # a floor of exactly 0 (a noiseless torque off any grid): any drift is infinitely clear
+            "enr": float(np.sqrt(max(drift_excess, 0.0) / noise_cap))
+            if noise_cap > 0
+            else (float("inf") if drift_excess > 0 else 0.0),
             "detected": detected,
             "share_of_excess": float(share),
             "shrink": float((power - left) / excess) if excess > 0 else float("nan"),

@@ -39,14 +39,14 @@ ODE referee's tuning seed 7, PRBS replicates, :func:`position_floor` came to 0.4
 nominal's excess). No model of the recorded angle removes it (a reconstruction through the
 crossings' times raised the gap), but its size follows from the changes: just after the angle
 rises across an edge ``e = +q/2``, just before it does ``e = -q/2``, and between two crossings the
-angle stays in one cell. :class:`_Runs` makes ``e`` of each run (samples between two changes) a
-settling from the edge it came in at to a position ``u`` in the cell and back to the edge it goes
-out at, each at the least speed the crossing allows (a step in the samples of the shorter run it
-joins; k - 1 steps a sample where a change spans k), with ``u`` uniform: a run of one sample
-between fast changes is a uniform error (white), a hold its own constant with the move's bursts
-at its ends. :data:`GRID_DRAWS` draws through the nominal's pipeline, their mean held-out power.
-Checked against the true error (``tests/test_joint_position_sensor.py``, synthetic 12-bit
-recordings without torque noise, 8 seeds each): estimate / true 0.78-1.06 on a fast PRBS,
+angle stays in one cell. :class:`~.grid_error.GridRuns` makes ``e`` of each run (samples between
+two changes) a settling from the edge it came in at to a position ``u`` in the cell and back to
+the edge it goes out at, each at the least speed the crossing allows (a step in the samples of the
+shorter run it joins; k - 1 steps a sample where a change spans k), with ``u`` uniform: a run of
+one sample between fast changes is a uniform error (white), a hold its own constant with the
+move's bursts at its ends. :data:`GRID_DRAWS` draws through the nominal's pipeline, their mean
+held-out power. Checked against the true error (``tests/test_joint_position_sensor.py``, synthetic
+12-bit recordings without torque noise, 8 seeds each): estimate / true 0.78-1.06 on a fast PRBS,
 0.82-0.94 on a slow one, 0.85-0.99 on random steps, 0.34-1.04 on a sum of sines (its slow
 crossings are ramps the exponentials round off); a white ``q²/12`` per sample is 12-88 times the
 true gap on the PRBS and steps. On the ODE referee's tuning seed 7, ten encoder replicates:
@@ -71,8 +71,9 @@ from functools import lru_cache
 import numpy as np
 from scipy import signal
 
-from armlab.dsp import five_point_derivatives, lowpass_zero_phase, zero_phase
+from armlab.dsp import five_point_derivatives, grid_step, lowpass_zero_phase, zero_phase
 from armlab.protocols.joint_1dof.diagnosis.data import derivatives
+from armlab.protocols.joint_1dof.diagnosis.grid_error import GRID_DRAWS, GridRuns
 
 __all__ = [
     "GRID_DRAWS",
@@ -96,35 +97,7 @@ NOISE_EFFECT = "position_sensor_noise"
 #: the grid's white level searched, in units of q²/12: (lower, upper, start grid)
 GRID_LEVELS = (1.0, 100.0, (1.0, 3.0, 10.0, 30.0))
 
-#: draws of the held angle's positions in their cells averaged by :func:`grid_floor`
-GRID_DRAWS = 16
-
 _SEGMENT_S = 1.0  # s, Welch segments of the angle's spectrum (see the module docstring)
-_GRID_TOL = 0.01  # of a step: a change within this of a whole number of steps is on the grid
-_GRID_SHARE = 0.99  # of the changes that must be on the grid
-_MIN_CHANGES = 20  # changes needed to read a grid at all
-# changes below this fraction of the largest |angle| are the file's rounding (CSV: %.9g keeps
-# 5e-9 of a value), not the sensor's: they are taken as no change
-_ROUNDING = 1e-8
-
-
-def grid_step(x_raw: np.ndarray) -> float:
-    """rad, the step of the grid the recorded angle lies on, or 0.0 if it lies on none.
-
-    The smallest changes between samples are the step (their mean within 1.5 of the smallest);
-    the angle is on that grid when at least ``_GRID_SHARE`` of all changes are whole multiples
-    of it within ``_GRID_TOL`` of a step (a grid offset cancels in the differences).
-    """
-    x = np.asarray(x_raw, float)
-    d = np.abs(np.diff(x))
-    d = d[d > _ROUNDING * max(float(np.max(np.abs(x))), 1e-300)]
-    if d.size < _MIN_CHANGES:
-        return 0.0
-    q0 = float(np.min(d))
-    q = float(np.mean(d[d < 1.5 * q0]))
-    r = d / q
-    on = np.abs(r - np.round(r)) < _GRID_TOL
-    return q if np.mean(on) >= _GRID_SHARE else 0.0
 
 
 def _welch(x_raw: np.ndarray, fs_hz: float) -> tuple[np.ndarray, np.ndarray]:
@@ -196,46 +169,11 @@ def nominal_prediction(tr, x_raw: np.ndarray, beta: np.ndarray, hp) -> np.ndarra
     return zero_phase(hp, tr.to_fit_rate(np.stack([a, v, x_raw], axis=1)) @ beta)
 
 
-class _Runs:
-    """The recorded angle's runs (samples between two changes) and what the changes say of the
-    grid's error ``e = recorded - true`` at each run's ends (module docstring, the grid's floor)."""
-
-    def __init__(self, x_raw: np.ndarray, q: float):
-        d = np.diff(x_raw)
-        ch = np.flatnonzero(np.abs(d) > 0.5 * q)  # a change between samples i and i + 1
-        up = np.sign(d[ch])
-        starts = np.concatenate([[0], ch + 1])
-        self.length = np.diff(np.concatenate([starts, [x_raw.size]]))  # samples
-        self.run = np.repeat(np.arange(starts.size), self.length)
-        self.pos = np.arange(x_raw.size) - starts[self.run] + 0.5  # samples since the crossing in
-        nan = np.array([np.nan])  # the record's first and last runs have no crossing there
-        # e just after the crossing in (+q/2 after a rise), just before the one out (-q/2 before one)
-        self.first = np.concatenate([nan, 0.5 * q * up])
-        self.last = np.concatenate([-0.5 * q * up, nan])
-        # rad per sample, the least speed at each crossing: a step in the samples of the shorter run
-        # it joins, or, where the change spans k > 1 steps, k - 1 steps in one sample
-        n = self.length
-        speed = np.maximum(q / np.minimum(n[:-1], n[1:]), np.abs(d[ch]) - q)
-        self.speed_in = np.concatenate([[q], speed])
-        self.speed_out = np.concatenate([speed, [q]])
-
-    def error(self, u: np.ndarray) -> np.ndarray:
-        """(n,) rad, the error with the angle at ``u`` in its cell in each run (one per run, rad
-        from the cell's centre): it leaves the edge it came in at for ``u`` at the speed it came
-        in at and reaches the edge it goes out at likewise (exponentials)."""
-        r, pos, n = self.run, self.pos, self.length
-        first = np.where(np.isnan(self.first), u, self.first)
-        last = np.where(np.isnan(self.last), u, self.last)
-        tau_in = np.maximum(np.abs(first - u) / self.speed_in, 1e-9)[r]  # samples
-        tau_out = np.maximum(np.abs(last - u) / self.speed_out, 1e-9)[r]
-        return u[r] + (first - u)[r] * np.exp(-pos / tau_in) + (last - u)[r] * np.exp(-(n[r] - pos) / tau_out)
-
-
 def grid_floor(trials, betas, hp, y_band) -> float:
     """The gap an encoder's grid leaves in the nominal ``betas`` (per trial ``(I, B, K, ...)``), a
     share of the held-out measured power ``y_band``; 0.0 unless every trial lies on a grid.
 
-    The grid's error as the changes of the recorded angle place it (:class:`_Runs`), with the
+    The grid's error as the changes of the recorded angle place it (:class:`~.grid_error.GridRuns`), with the
     angle's position in each run's cell uniform over the step; :data:`GRID_DRAWS` draws of them
     through the nominal's pipeline, summed over trials, and the mean over draws (module docstring)."""
     steps = [grid_step(tr.x_raw) for tr in trials]
@@ -245,7 +183,7 @@ def grid_floor(trials, betas, hp, y_band) -> float:
     per = np.zeros(GRID_DRAWS)
     for tr, beta, q in zip(trials, betas, steps, strict=True):
         b = np.asarray(beta, float)[:3]
-        runs = _Runs(np.asarray(tr.x_raw, float), q)
+        runs = GridRuns(np.asarray(tr.x_raw, float), q)
         for i in range(GRID_DRAWS):
             e = runs.error(rng.uniform(-0.5 * q, 0.5 * q, runs.length.size))
             per[i] += float(np.sum(nominal_prediction(tr, e, b, hp)[tr.held] ** 2))
