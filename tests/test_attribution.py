@@ -22,7 +22,7 @@ from conftest import (
 
 from armlab.config.diagnosis import DiagnosisConfig
 from armlab.diagnosis.attribution import held_out_gap, select_effects
-from armlab.diagnosis.families import fit_model
+from armlab.diagnosis.families import NLParam, fit_model
 from armlab.protocols.joint_1dof.diagnosis.data import noise_floor
 from armlab.protocols.joint_1dof.diagnosis.models import JOINT_FAMILY, JOINT_SURROGATES
 from armlab.protocols.joint_1dof.diagnosis.rules import RULES
@@ -187,3 +187,13 @@ def test_a_delay_is_not_named_a_compliance_for_the_parameters_it_shares(delay_s)
     assert sel.verdict == ["channel_delay"]
     added = {e["name"]: e["added_params"] for e in sel.rankings[0]}
     assert added == {"cuff_compliance": 3, "transmission_compliance": 2, "channel_delay": 1}
+
+
+def test_a_start_grid_outside_its_bounds_is_refused():
+    """A start outside the bounds would be returned as the fit when the refinement (which starts
+    from the clipped value) does not improve on it: refused where the parameter is declared."""
+    with pytest.raises(ValueError, match=r"g\.k: start grid \(5\.0,\) outside \[0\.5, 2\.0\]"):
+        NLParam("g.k", 0.5, 2.0, (5.0,))
+    with pytest.raises(ValueError, match="outside"):
+        NLParam("g.k", 2.0, 0.5, ())
+    assert NLParam("g.k", 0.5, 2.0, (0.5, 2.0)).grid == (0.5, 2.0)

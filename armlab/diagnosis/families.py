@@ -56,6 +56,11 @@ class NLParam:
     discrete: bool = False
     active_when: tuple[str, float] | None = None
 
+    def __post_init__(self) -> None:
+        # a start outside the bounds would survive a refinement that does not improve on it
+        if not self.lower <= self.upper or any(not self.lower <= g <= self.upper for g in self.grid):
+            raise ValueError(f"{self.name}: start grid {self.grid} outside [{self.lower}, {self.upper}]")
+
 
 @dataclass(frozen=True)
 class Surrogate:
