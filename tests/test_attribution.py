@@ -21,7 +21,7 @@ from conftest import (
 )
 
 from armlab.config.diagnosis import DiagnosisConfig
-from armlab.diagnosis.attribution import held_out_gap, select_effects
+from armlab.diagnosis.attribution import _by_score, held_out_gap, select_effects
 from armlab.diagnosis.families import NLParam, fit_model
 from armlab.protocols.joint_1dof.diagnosis.data import noise_floor
 from armlab.protocols.joint_1dof.diagnosis.models import JOINT_FAMILY, JOINT_SURROGATES
@@ -197,3 +197,14 @@ def test_a_start_grid_outside_its_bounds_is_refused():
     with pytest.raises(ValueError, match="outside"):
         NLParam("g.k", 2.0, 0.5, ())
     assert NLParam("g.k", 0.5, 2.0, (0.5, 2.0)).grid == (0.5, 2.0)
+
+
+def test_a_nan_score_ranks_last_and_the_order_is_otherwise_by_delta_bic():
+    """Python's sort leaves a NaN key wherever it fell, so a +5 candidate ahead of a NaN would have
+    been 'best' and stopped the selection; -inf (a candidate that leaves nothing) stays first, and
+    equal scores keep the candidates' order."""
+    scores = [5.0, float("nan"), -30.0, -3.0, float("-inf"), 0.0]
+    ranked = _by_score([{"delta_bic": d, "i": i} for i, d in enumerate(scores)])
+    assert [e["i"] for e in ranked] == [4, 2, 3, 5, 0, 1]
+    ties = _by_score([{"delta_bic": 0.0, "i": i} for i in range(3)])
+    assert [e["i"] for e in ties] == [0, 1, 2]

@@ -231,7 +231,7 @@ def select_effects(
             except BaseException:  # an interrupt: the fits not started are dropped, not waited for
                 pool.shutdown(cancel_futures=True)
                 raise
-        entries.sort(key=lambda e: e["delta_bic"])
+        entries = _by_score(entries)
         rankings.append(entries)
         best = entries[0] if entries else None
         if best is None or best["model"] is None:
@@ -274,6 +274,13 @@ def select_effects(
     return Selection(
         verdict=verdict, stages=stages, rankings=rankings, floor=floor, indistinct=indistinct, partial=partial
     )
+
+
+def _by_score(entries: list[dict]) -> list[dict]:
+    """The ranking's order: by ``delta_bic``, stable (ties keep the candidates' order); a NaN score
+    (a zero held-out residual of the current model, a degenerate fit) last, where Python's sort
+    would leave it wherever it fell and let a worse candidate ahead of it pass as the best."""
+    return sorted(entries, key=lambda e: (bool(np.isnan(e["delta_bic"])), e["delta_bic"]))
 
 
 def _entry(name, gap_before, gap, dbic, dp, excess0, model, identifiable=True, params=None) -> dict:
