@@ -97,7 +97,9 @@ def _dahl(v: np.ndarray, presliding_rad: float, fs: float) -> np.ndarray:
     reversal the force builds over a few ``presliding_rad`` of travel towards the sliding level,
     and it is held while the joint rests (the bristles stay deflected), where the smoothed Coulomb
     law of :func:`_friction` follows the velocity. Exact for a direction constant within each
-    sample: over a travel ``|dx|``, ``s`` moves towards ``sgn(dx)`` by ``1 - exp(-|dx| / x_p)``.
+    sample: over a travel ``|dx|``, ``s`` moves towards ``sgn(dx)`` by ``1 - exp(-|dx| / x_p)``;
+    ``v`` is read as the velocity at each sample's instant, so ``s`` at sample ``k`` has covered
+    the path up to the middle of that sample's travel (``t_k``, not half a sample later).
     The recursion runs over the runs of one direction (one scalar step per reversal), then every
     sample is filled from its run's start at once.
     """
@@ -115,7 +117,10 @@ def _dahl(v: np.ndarray, presliding_rad: float, fs: float) -> np.ndarray:
     for k, (dk, ek) in enumerate(zip(d[starts[:-1]].tolist(), decay[:-1], strict=True)):
         s0[k + 1] = dk - (dk - s0[k]) * ek
     run = np.repeat(np.arange(starts.size), np.diff(np.r_[starts, d.size]))
-    return d - (d - np.asarray(s0)[run]) * np.exp(-(travel[1:] - travel[starts][run]) / presliding_rad)
+    # the velocity v[k] is the sample's own (a central difference), its travel v[k]/fs spans
+    # t_k ± 1/(2 fs): s(t_k) has covered half of it (the whole of it is s half a sample later)
+    at_k = travel[1:] - 0.5 * np.abs(dx)
+    return d - (d - np.asarray(s0)[run]) * np.exp(-(at_k - travel[starts][run]) / presliding_rad)
 
 
 @lru_cache(maxsize=64)  # 6 trials x the delays in flight (the grid's 23, a few refinements)
