@@ -116,9 +116,11 @@ def scan_operating_point(trials, y_band, hp, *, band_share: float, sign: float) 
         a, b = phi[m], y[m]
         beta, *_ = np.linalg.lstsq(a, b, rcond=None)
         n_eff = max(m.sum() * band_share, 4.0)
+        # the residual's variance as if white over the effective samples (its band-limited power
+        # over n_eff): with the band's columns, cov = sigma2 (a^T a)^-1 (a second factor
+        # n / n_eff on the normal matrix counted the band twice: SEs 1/sqrt(band_share) too large)
         sigma2 = float(np.sum((b - a @ beta) ** 2)) / max(n_eff - 3.0, 1.0)
-        # the normal matrix over the effective samples: (a^T a) · n_eff / n
-        cov = sigma2 * np.linalg.inv(a.T @ a * (n_eff / m.sum()))
+        cov = sigma2 * np.linalg.inv(a.T @ a)
         values[i], se[i] = sign * beta, np.sqrt(np.diag(cov))
         centres[i] = float(np.median(op[m]))
     p_const, rel = {}, {}
