@@ -208,3 +208,22 @@ def test_a_nan_score_ranks_last_and_the_order_is_otherwise_by_delta_bic():
     assert [e["i"] for e in ranked] == [4, 2, 3, 5, 0, 1]
     ties = _by_score([{"delta_bic": 0.0, "i": i} for i in range(3)])
     assert [e["i"] for e in ties] == [0, 1, 2]
+
+
+# the channel delay's start grid spans -20...40 ms of its -30...60 ms bounds
+@pytest.mark.parametrize("delay_s", [0.05, 0.058, -0.025, 0.039, 0.01])
+def test_a_delay_beyond_its_start_grid_is_fitted_where_its_bounds_allow(delay_s):
+    # the one-parameter search's window was one grid spacing (2.9 ms) about the best grid point:
+    # a 50 ms delay came out at 42.9 ms and a -25 ms one at -22.9 ms, the window's edges. 0.1 ms:
+    # the fits inside the grid (39, 10 ms) come within 0.04 ms with 0.15 N·m torque noise
+    rng = np.random.default_rng(0)
+    records = joint_trials(
+        prbs_position(rng, 12.0),
+        lambda x: delayed(nominal_torque(x), delay_s),
+        rng,
+        noise_std=0.15,
+        repeats=2,
+    )
+    trials, hp, y_band = prepared(records)
+    model = fit_model(trials, y_band, (JOINT_SURROGATES["channel_delay"],), hp, family=JOINT_FAMILY)
+    assert model.theta["channel_delay.delay_s"] == pytest.approx(delay_s, abs=1e-4)

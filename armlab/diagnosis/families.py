@@ -375,6 +375,30 @@ def _canonical(theta: dict[str, float], params: dict[str, NLParam]) -> dict[str,
     return theta
 
 
+def _past_grid_end(u0: float, grid_u: list[float], lo: float, hi: float, resid) -> float:
+    """Where the one-parameter search centres its window: ``u0``, or, where ``u0`` is the grid's
+    first or last point, the best of the grid continued at its end spacing out to the bound.
+
+    The grid spans less than the declared bounds (a channel delay's grid -20...40 ms, its bounds
+    -30...60 ms), and a window of one grid spacing about the grid's end cannot reach past it: a
+    50 ms delay was fitted at 42.9 ms, the window's edge.
+    """
+    g = np.unique(np.asarray(grid_u, dtype=float))
+    if g.size < 2:
+        return u0
+    tol = 1e-9 * max(hi - lo, 1e-300)
+    if abs(u0 - g[-1]) <= tol and hi - g[-1] > tol:
+        edge, spacing = hi, g[-1] - g[-2]
+    elif abs(u0 - g[0]) <= tol and g[0] - lo > tol:
+        edge, spacing = lo, g[0] - g[1]
+    else:
+        return u0
+    n = int(np.ceil((edge - u0) / spacing - 1e-9))
+    points = [u0 + k * spacing for k in range(1, n)] + [edge]
+    costs = [float(np.sum(resid(np.array([x])) ** 2)) for x in [u0, *points]]
+    return [u0, *points][int(np.argmin(costs))]
+
+
 def _refine(prob: _Problem, theta: dict, free: list[str], params: dict[str, NLParam]) -> dict:
     """Bounded least squares over the free nonlinear parameters (log coordinates where marked)."""
 
@@ -396,7 +420,8 @@ def _refine(prob: _Problem, theta: dict, free: list[str], params: dict[str, NLPa
         # one parameter: a bounded scalar search on the concentrated cost (a few dozen solves,
         # where the trust-region solver spends most of its evaluations on finite differences)
         step = (hi[0] - lo[0]) / max(len(params[free[0]].grid), 4)
-        a, b = max(lo[0], u0[0] - step), min(hi[0], u0[0] + step)
+        centre = _past_grid_end(u0[0], [to_u(free[0], g) for g in params[free[0]].grid], lo[0], hi[0], resid)
+        a, b = max(lo[0], centre - step), min(hi[0], centre + step)
         sol1 = optimize.minimize_scalar(
             lambda x: float(np.sum(resid(np.array([x])) ** 2)),
             bounds=(a, b),
