@@ -121,6 +121,10 @@ def test_compliances_are_flagged_indistinct_with_the_trial_that_separates_them()
 def test_payload_mass_is_listed_but_never_selected():
     sel = _select(nominal_torque, ["payload_mass", "channel_delay"])
     assert sel.verdict == ["none"]
+    # not fitted, so ranked after the fitted delay, which does not pay for its parameter here
+    # (delta_bic > 0): at its 0.0 it had ranked first
+    assert [e["name"] for e in sel.rankings[0]] == ["channel_delay", "payload_mass"]
+    assert sel.rankings[0][0]["delta_bic"] > 0.0
     entry = next(e for e in sel.rankings[0] if e["name"] == "payload_mass")
     assert entry["identifiable"] is False and entry["model"] is None
     assert entry["gap_reduction"] == 0.0 and entry["delta_bic"] == 0.0

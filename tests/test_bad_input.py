@@ -426,6 +426,11 @@ OTHER = [
         ["diagnose", "data={ok}", "protocol=joint_1dof", "diagnosis.bic_margin=inf"],
         ["diagnosis.bic_margin=inf is not a finite number"],
     ),
+    (
+        "diagnose-negative-margin",
+        ["diagnose", "data={ok}", "protocol=joint_1dof", "diagnosis.bic_margin=-3"],
+        ["diagnosis.bic_margin must be >= 0"],
+    ),
     ("effects-empty-protocol", ["effects", "protocol="], ["no effects for protocol ''", "valid protocols"]),
     (
         "benchmark-rate-too-low",

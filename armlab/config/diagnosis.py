@@ -59,7 +59,14 @@ class DiagnosisConfig:
         )
         check(1 <= self.max_effects <= 3, f"diagnosis.max_effects must be 1, 2 or 3, got {self.max_effects}")
         check(self.min_duration_s > 0, "diagnosis.min_duration_s must be > 0")
-        for name in ("min_step_fraction", "min_floor_fraction", "min_first_explained", "none_tolerance"):
+        # a negative margin would accept an effect that makes the penalised score worse
+        for name in (
+            "bic_margin",
+            "min_step_fraction",
+            "min_floor_fraction",
+            "min_first_explained",
+            "none_tolerance",
+        ):
             value = getattr(self, name)
             check(value is None or value >= 0, f"diagnosis.{name} must be >= 0")
         check(

@@ -279,8 +279,16 @@ def select_effects(
 def _by_score(entries: list[dict]) -> list[dict]:
     """The ranking's order: by ``delta_bic``, stable (ties keep the candidates' order); a NaN score
     (a zero held-out residual of the current model, a degenerate fit) last, where Python's sort
-    would leave it wherever it fell and let a worse candidate ahead of it pass as the best."""
-    return sorted(entries, key=lambda e: (bool(np.isnan(e["delta_bic"])), e["delta_bic"]))
+    would leave it wherever it fell and let a worse candidate ahead of it pass as the best.
+
+    A candidate that cannot be identified (kind ``absorbed``: not fitted, its row scored 0.0)
+    follows every fitted one that has a score: at 0.0 it ranked above the fitted candidates that
+    did not pay for their parameters, and could push a right effect out of the top two.
+    """
+    return sorted(
+        entries,
+        key=lambda e: (bool(np.isnan(e["delta_bic"])), not e.get("identifiable", True), e["delta_bic"]),
+    )
 
 
 def _entry(name, gap_before, gap, dbic, dp, excess0, model, identifiable=True, params=None) -> dict:
