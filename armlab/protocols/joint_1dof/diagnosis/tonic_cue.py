@@ -72,11 +72,16 @@ from __future__ import annotations
 
 import numpy as np
 
+from armlab.dsp import butterworth, zero_phase
 from armlab.protocols.joint_1dof.diagnosis.data import slow_lowpass
 
 __all__ = [
+    "FOLLOW_BAND_HZ",
+    "FOLLOW_LAGS_S",
     "MAX_PERTURBATION_SHARE",
+    "MIN_ENVELOPE_FOLLOW",
     "RECTIFYING_EFFECTS",
+    "envelope_follow",
     "held_verdict",
     "perturbation_share",
     "rectifier_rivals",
@@ -91,6 +96,17 @@ MAX_PERTURBATION_SHARE = 0.5
 #: the candidates whose response to the perturbation rectifies it (a slow part that follows its
 #: speed envelope): the stretch reflex's delay -> max(dir·θ̇, 0) -> activation (module docstring)
 RECTIFYING_EFFECTS = ("reflex",)
+#: Hz, the band above the tonic level's in which a rectifier's output is read against the speed's
+#: envelope (the perturbation's own swells of speed, faster than a subject's 0.05-0.3 Hz
+#: co-contraction, issue 18)
+FOLLOW_BAND_HZ = (0.5, 2.0)
+#: s, the lags searched: a stretch reflex's latency (25-50 ms, Kearney et al. 1997) and the lag of
+#: its 1.5-6 Hz activation low-pass (2ζ/ω_n, 40-150 ms); the tuning seeds' best lags: 99-173 ms
+FOLLOW_LAGS_S = (0.06, 0.2)
+#: 1, partial R² from which the residual follows the speed envelope as a rectifier's output does:
+#: between the hidden co-contractions' at most 0.03 and the left-out reflexes' at least 0.30 (ODE
+#: referee, tuning seeds 7 and 11, 10 replicates of each class; docs/joint_1dof_referees.md)
+MIN_ENVELOPE_FOLLOW = 0.1
 
 
 def perturbation_share(m: np.ndarray, v: np.ndarray, fs_hz: float, slow_hz: float) -> float:
@@ -108,6 +124,39 @@ def perturbation_share(m: np.ndarray, v: np.ndarray, fs_hz: float, slow_hz: floa
     return float(max(0.0, 1.0 - np.sum((m - basis @ coef) ** 2) / spread))
 
 
+def envelope_follow(r: np.ndarray, v: np.ndarray, scored: np.ndarray, fs_hz: float) -> float:
+    """How far the residual ``r`` follows the speed envelope beyond the velocity, a reflex's lag later.
+
+    Both in :data:`FOLLOW_BAND_HZ` (zero-phase band-pass): the partial R² of ``r`` on ``|v|``
+    delayed by ``L`` beside ``v`` delayed by ``L`` (a delayed linear feedback makes the latter,
+    only a rectifier the former), the best over ``L`` in :data:`FOLLOW_LAGS_S`, on the ``scored``
+    samples whose delayed partner is recorded too.
+
+    Args:
+        r: (n,) N·m, the nominal model's residual.
+        v: (n,) rad/s, the velocity.
+        scored: (n,) bool, the samples read (``train | held``).
+        fs_hz: Hz, sample rate.
+    """
+    sos = butterworth(FOLLOW_BAND_HZ, fs_hz, 2, btype="bandpass")
+    rb, eb, vb = (zero_phase(sos, np.asarray(z, float)) for z in (r, np.abs(v), v))
+    best = 0.0
+    lo, hi = (int(round(s * fs_hz)) for s in FOLLOW_LAGS_S)
+    for lag in range(max(lo, 1), hi + 1, max(1, int(round(0.004 * fs_hz)))):
+        k = scored[lag:]
+        y, e, u = rb[lag:][k], eb[:-lag][k], vb[:-lag][k]
+        uu = float(np.dot(u, u))
+        if y.size < 3 or uu <= 0.0:
+            continue
+        rss_v = float(np.sum((y - (np.dot(y, u) / uu) * u) ** 2))
+        basis = np.stack([e, u], axis=1)
+        coef, *_ = np.linalg.lstsq(basis, y, rcond=None)
+        rss_both = float(np.sum((y - basis @ coef) ** 2))
+        if rss_v > 0.0:
+            best = max(best, 1.0 - rss_both / rss_v)
+    return best
+
+
 def tonic_cue_check(trials, slow_hz: float) -> dict:
     """The check of the module docstring on prepared trials (:class:`.data.PreparedTrial`), each
     read on the samples its models are fitted and scored on (``train | held``: a start-up transient
@@ -118,16 +167,23 @@ def tonic_cue_check(trials, slow_hz: float) -> dict:
         MAX_PERTURBATION_SHARE, "driven": mean >= max_share}`` (the diagnosis adds ``excluded``
         and ``held``).
     """
-    per = []
+    per, follow = [], []
     for tr in trials:
         k = tr.train | tr.held
         per.append(perturbation_share(tr.m[k], tr.v[k], tr.fs_hz, slow_hz))
-    share = float(np.mean(per))
+        # the nominal's residual (fitted on the training part, as every model is)
+        basis = np.stack([tr.a, tr.v, tr.x, np.ones_like(tr.x)], axis=1)
+        beta, *_ = np.linalg.lstsq(basis[tr.train], tr.y[tr.train], rcond=None)
+        follow.append(envelope_follow(tr.y - basis @ beta, tr.v, k, tr.fs_hz))
+    share, follows = float(np.mean(per)), float(np.mean(follow))
     return {
         "perturbation_share": share,
         "per_trial": per,
         "max_share": MAX_PERTURBATION_SHARE,
-        "driven": bool(share >= MAX_PERTURBATION_SHARE),
+        "envelope_follow": follows,
+        "envelope_follow_per_trial": follow,
+        "min_follow": MIN_ENVELOPE_FOLLOW,
+        "driven": bool(share >= MAX_PERTURBATION_SHARE and follows >= MIN_ENVELOPE_FOLLOW),
     }
 
 
