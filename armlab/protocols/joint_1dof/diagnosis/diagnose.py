@@ -270,10 +270,11 @@ def _diagnose_group(records, cfg: DiagnosisConfig) -> tuple[dict, dict]:
     floor = sensor_floor + deriv_floor
     names = candidate_names(cfg)
     _check_rate(names, fs, records[0].fs_hz)
-    # a tonic level that the perturbation's speed envelope drives is no cue of co-contraction
-    # (:mod:`.tonic_cue`): the candidate is not tried
+    # a tonic level that the perturbation's speed envelope drives through a rectifier (the residual
+    # follows the envelope a reflex's lag later) is no cue of co-contraction (:mod:`.tonic_cue`):
+    # the candidate is not tried
     cue = tonic_cue_check(trials, cfg.slow_hz)
-    cue["excluded"] = [_COCONTRACTION] if cue["driven"] and _COCONTRACTION in names else []
+    cue["excluded"] = [_COCONTRACTION] if cue["rectified"] and _COCONTRACTION in names else []
     names = [n for n in names if n not in cue["excluded"]]
     band_share = (cfg.band_hz - cfg.highpass_hz) / (0.5 * fs)
     varying, stationary, tv_nominal = None, None, None

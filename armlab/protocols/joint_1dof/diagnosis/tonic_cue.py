@@ -81,6 +81,7 @@ __all__ = [
     "MAX_PERTURBATION_SHARE",
     "MIN_ENVELOPE_FOLLOW",
     "RECTIFYING_EFFECTS",
+    "SPEED_COUPLED_EFFECTS",
     "envelope_follow",
     "held_verdict",
     "perturbation_share",
@@ -96,6 +97,10 @@ MAX_PERTURBATION_SHARE = 0.5
 #: the candidates whose response to the perturbation rectifies it (a slow part that follows its
 #: speed envelope): the stretch reflex's delay -> max(dir·θ̇, 0) -> activation (module docstring)
 RECTIFYING_EFFECTS = ("reflex",)
+#: the candidates that move the speed envelope with the tonic level without rectifying: a swing of
+#: co-contraction changes the joint's stiffness, hence how far the position servo moves it
+#: (module docstring); named, they account for a driven tonic level that follows no reflex
+SPEED_COUPLED_EFFECTS = ("cocontraction_variation",)
 #: Hz, the band above the tonic level's in which a rectifier's output is read against the speed's
 #: envelope (the perturbation's own swells of speed, faster than a subject's 0.05-0.3 Hz
 #: co-contraction, issue 18)
@@ -183,7 +188,8 @@ def tonic_cue_check(trials, slow_hz: float) -> dict:
         "envelope_follow": follows,
         "envelope_follow_per_trial": follow,
         "min_follow": MIN_ENVELOPE_FOLLOW,
-        "driven": bool(share >= MAX_PERTURBATION_SHARE and follows >= MIN_ENVELOPE_FOLLOW),
+        "driven": bool(share >= MAX_PERTURBATION_SHARE),
+        "rectified": bool(share >= MAX_PERTURBATION_SHARE and follows >= MIN_ENVELOPE_FOLLOW),
     }
 
 
@@ -203,6 +209,8 @@ def held_verdict(
     named = [e for e in verdict if e not in ("none", "unknown")]
     if not cue["driven"] or not named or "unknown" in verdict or set(named) & set(RECTIFYING_EFFECTS):
         return []
+    if set(named) & set(SPEED_COUPLED_EFFECTS) and not cue.get("rectified", True):
+        return []  # the co-contraction moves the speed with the tonic level, no reflex is seen
     if not rectifier_rivals(rectifier_explained, min_rival):
         return []
     return named
