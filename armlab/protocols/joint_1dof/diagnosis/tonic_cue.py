@@ -121,7 +121,8 @@ SPEED_COUPLED_EFFECTS = ("cocontraction_variation",)
 #: envelope (the perturbation's own swells of speed, faster than a subject's 0.05-0.3 Hz
 #: co-contraction, issue 18)
 FOLLOW_BAND_HZ = (0.5, 2.0)
-#: s, the lags searched: a stretch reflex's latency (25-50 ms, Kearney et al. 1997) and the lag of
+#: s, the lags searched: a stretch reflex's latency (40-50 ms at the ankle, Kearney et al. 1997;
+#: ~25 ms at the elbow, the fractional_elbow reflex of seeds/004) and the lag of
 #: its 1.5-6 Hz activation low-pass (2ζ/ω_n, 40-150 ms); the tuning seeds' best lags: ~100-170 ms
 FOLLOW_LAGS_S = (0.06, 0.2)
 #: 1, partial R² from which the residual follows the speed envelope as a rectifier's output does:
@@ -220,8 +221,9 @@ def held_verdict(
     effect's step must reach, ``min_step_fraction``: a rectifier present in the scoring band). A
     rectifier that was scored and explains less is absent there: the driven slow level is then not
     its, or its in-band part is negligible beside a real effect the selection named (the ODE
-    referee's reflex+friction, seed 1000 replicate 7: the reflex 9 %, the friction 99.7 %). Else,
-    and for ``["none"]`` and any verdict that already ends in ``unknown``, ``[]``."""
+    referee's reflex+friction, seed 1000 replicate 7: the reflex 9 %, the friction 99.7 %). A named
+    :data:`SPEED_COUPLED_EFFECTS` member accounts for a level that is driven but not ``rectified``
+    (``[]``). Else, and for ``["none"]`` and any verdict that already ends in ``unknown``, ``[]``."""
     named = [e for e in verdict if e not in ("none", "unknown")]
     if not cue["driven"] or not named or "unknown" in verdict or set(named) & set(RECTIFYING_EFFECTS):
         return []
