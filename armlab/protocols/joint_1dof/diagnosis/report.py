@@ -41,7 +41,7 @@ from armlab.diagnosis.report_text import (
 from armlab.protocols.joint_1dof.diagnosis.report_grid import grid_how_far_row, grid_verdict_paragraph
 from armlab.protocols.joint_1dof.diagnosis.report_low_band import drift_verdict_paragraph, low_band_section
 from armlab.protocols.joint_1dof.diagnosis.report_operating_point import operating_point_section
-from armlab.protocols.joint_1dof.diagnosis.report_tonic import held_verdict_paragraph
+from armlab.protocols.joint_1dof.diagnosis.report_tonic import held_verdict_paragraph, tonic_cue_lines
 from armlab.protocols.joint_1dof.diagnosis.rules import RULES
 
 __all__ = [
@@ -189,29 +189,7 @@ def _which(r: Mapping[str, Any], h: str, settings: Mapping[str, Any] | None) -> 
         f"least {100 * float(s.get('min_first_explained', 0.4)):.0f} % of the excess; up to "
         f"{s.get('max_effects', 3)} effects are added greedily.",
     ]
-    cue = r.get("tonic_cue") or {}
-    if cue.get("excluded"):
-        out += [
-            "",
-            f"`{'`, `'.join(cue['excluded'])}` was not tried: the perturbation's own slow speed envelope "
-            f"explains {fmt_num(100 * float(cue['perturbation_share']))} % of the tonic torque's variance "
-            f"(at least {fmt_num(100 * float(cue['max_share']))} % counts as driven by the perturbation)"
-            f"{_follow_words(cue)}, so "
-            "the tonic level is a response to the perturbation (e.g. a stretch reflex's mean), not the "
-            "subject's co-contraction that candidate reads from it.",
-        ]
-    elif cue.get("driven") and not cue.get("rectified", True):
-        out += [
-            "",
-            f"The perturbation's slow speed envelope explains "
-            f"{fmt_num(100 * float(cue['perturbation_share']))} % of the tonic torque's variance, but the "
-            f"residual does not follow the envelope's faster swells as a rectifier's output does "
-            f"(partial R² {fmt_num(float(cue['envelope_follow']))}, below "
-            f"{fmt_num(float(cue['min_follow']))}): "
-            "the tonic level and the speed move together without a reflex making one of the other (a "
-            "co-contraction changes how far the servo moves the joint), so `cocontraction_variation` "
-            "was tried.",
-        ]
+    out += tonic_cue_lines(r.get("tonic_cue") or {})
     for step, entries in enumerate(r.get("ranking_steps") or [r.get("ranking") or []]):
         base = stage_name(effects[:step])
         out += ["", f"{h}# Step {step + 1}: candidates added to the {base} model", ""]
@@ -381,17 +359,6 @@ def _how_far(r: Mapping[str, Any], h: str) -> list[str]:
             ]
             out += md_table(["trial", "parameter", "nominal", stage_name(last["effects"])], rows)
     return out
-
-
-def _follow_words(cue: Mapping[str, Any]) -> str:
-    """`` and the residual follows ...`` where the cue carries the envelope check (results written
-    before it do not)."""
-    if cue.get("envelope_follow") is None:
-        return ""
-    return (
-        f", and the residual follows the envelope's 0.5-2 Hz swells a reflex's lag later (partial R² "
-        f"{fmt_num(float(cue['envelope_follow']))}, at least {fmt_num(float(cue['min_follow']))})"
-    )
 
 
 def _one(r: Mapping[str, Any], h: str, settings: Mapping[str, Any] | None) -> list[str]:

@@ -1,5 +1,6 @@
-"""The verdict paragraph of ``report.md`` where a driven tonic level held the verdict back
-(``results.tonic_cue.held``, :func:`.tonic_cue.held_verdict`; docs/diagnosis_schema.md)."""
+"""The tonic cue in ``report.md``: the verdict paragraph where a driven tonic level held the verdict
+back (``results.tonic_cue.held``, :func:`.tonic_cue.held_verdict`) and the lines of *Which* that say
+whether ``cocontraction_variation`` was tried (docs/diagnosis_schema.md)."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ from typing import Any
 from armlab.diagnosis.report_text import effects_words, fmt_num, fmt_part, fmt_pct, fmt_vaf
 from armlab.protocols.joint_1dof.diagnosis.tonic_cue import RECTIFYING_EFFECTS
 
-__all__ = ["held_verdict_paragraph"]
+__all__ = ["held_verdict_paragraph", "tonic_cue_lines"]
 
 
 def held_verdict_paragraph(r: Mapping[str, Any]) -> str | None:
@@ -61,4 +62,44 @@ def held_verdict_paragraph(r: Mapping[str, Any]) -> str | None:
         f"{rect_words[0].upper()}{rect_words[1:]}. A trial of one-sided stretches (pulses in one "
         "direction) would separate them: a rectifier answers them and their reversal differently, a "
         "linear effect alike."
+    )
+
+
+def tonic_cue_lines(cue: Mapping[str, Any]) -> list[str]:
+    """The lines of *Which* on the co-contraction candidate: not tried where the tonic level is
+    rectified (``excluded``), tried where it is driven but follows no reflex; else none."""
+    out: list[str] = []
+    if cue.get("excluded"):
+        out += [
+            "",
+            f"`{'`, `'.join(cue['excluded'])}` was not tried: the perturbation's own slow speed envelope "
+            f"explains {fmt_num(100 * float(cue['perturbation_share']))} % of the tonic torque's variance "
+            f"(at least {fmt_num(100 * float(cue['max_share']))} % counts as driven by the perturbation)"
+            f"{_follow_words(cue)}, so "
+            "the tonic level is a response to the perturbation (e.g. a stretch reflex's mean), not the "
+            "subject's co-contraction that candidate reads from it.",
+        ]
+    elif cue.get("driven") and not cue.get("rectified", True):
+        out += [
+            "",
+            f"The perturbation's slow speed envelope explains "
+            f"{fmt_num(100 * float(cue['perturbation_share']))} % of the tonic torque's variance, but the "
+            f"residual does not follow the envelope's faster swells as a rectifier's output does "
+            f"(partial R² {fmt_num(float(cue['envelope_follow']))}, below "
+            f"{fmt_num(float(cue['min_follow']))}): "
+            "the tonic level and the speed move together without a reflex making one of the other (a "
+            "co-contraction changes how far the servo moves the joint), so `cocontraction_variation` "
+            "was tried.",
+        ]
+    return out
+
+
+def _follow_words(cue: Mapping[str, Any]) -> str:
+    """`` and the residual follows ...`` where the cue carries the envelope check (results written
+    before it do not)."""
+    if cue.get("envelope_follow") is None:
+        return ""
+    return (
+        f", and the residual follows the envelope's 0.5-2 Hz swells a reflex's lag later (partial R² "
+        f"{fmt_num(float(cue['envelope_follow']))}, at least {fmt_num(float(cue['min_follow']))})"
     )
