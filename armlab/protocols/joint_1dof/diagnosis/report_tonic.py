@@ -40,12 +40,6 @@ def held_verdict_paragraph(r: Mapping[str, Any]) -> str | None:
         else f"{effects_words(list(RECTIFYING_EFFECTS))}, {which}, was not among this diagnosis's candidates"
     )
     one = len(held) == 1
-    follow = (
-        ""
-        if cue.get("envelope_follow") is None
-        else f", and the residual follows its 0.5-2 Hz swells a reflex's lag later (partial R² "
-        f"{fmt_num(float(cue['envelope_follow']))})"
-    )
     return (
         "**Verdict: unknown — the perturbation drives a slow torque that the named effects cannot "
         f"make.** The nominal simulation's held-out VAF is {fmt_vaf(nominal)} (gap {fmt_pct(nominal)}), "
@@ -53,7 +47,8 @@ def held_verdict_paragraph(r: Mapping[str, Any]) -> str | None:
         f"acceptance rules and remove{'s' if one else ''} {fmt_part(removed)} of the gap above the floor "
         f"(gap {fmt_pct(final)} after {'it' if one else 'them'}), but the perturbation's own slow speed "
         f"envelope explains {fmt_num(100 * float(cue['perturbation_share']))} % of the tonic torque's "
-        f"variance (at least {fmt_num(100 * float(cue['max_share']))} % counts as driven){follow}: something "
+        f"variance (at least {fmt_num(100 * float(cue['max_share']))} % counts as driven)"
+        f"{_follow_words(cue)}: something "
         "rectifies the perturbation, as a stretch reflex does, while "
         f"{'the named effect is' if one else 'the named effects are'} linear, odd in the velocity or "
         "not driven by the perturbation: "
