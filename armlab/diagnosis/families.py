@@ -375,9 +375,10 @@ def _canonical(theta: dict[str, float], params: dict[str, NLParam]) -> dict[str,
     return theta
 
 
-def _past_grid_end(u0: float, grid_u: list[float], lo: float, hi: float, resid) -> float:
+def _past_grid_end(u0: float, cost0: float, grid_u: list[float], lo: float, hi: float, cost) -> float:
     """Where the one-parameter search centres its window: ``u0``, or, where ``u0`` is the grid's
-    first or last point, the best of the grid continued at its end spacing out to the bound.
+    first or last point, the best of the grid continued at its end spacing out to the bound
+    (``cost``: the concentrated cost at a point, ``cost0`` its value at ``u0``).
 
     The grid spans less than the declared bounds (a channel delay's grid -20...40 ms, its bounds
     -30...60 ms), and a window of one grid spacing about the grid's end cannot reach past it: a
@@ -395,7 +396,7 @@ def _past_grid_end(u0: float, grid_u: list[float], lo: float, hi: float, resid) 
         return u0
     n = int(np.ceil((edge - u0) / spacing - 1e-9))
     points = [u0 + k * spacing for k in range(1, n)] + [edge]
-    costs = [float(np.sum(resid(np.array([x])) ** 2)) for x in [u0, *points]]
+    costs = [cost0, *(cost(x) for x in points)]
     return [u0, *points][int(np.argmin(costs))]
 
 
@@ -419,11 +420,15 @@ def _refine(prob: _Problem, theta: dict, free: list[str], params: dict[str, NLPa
     if len(free) == 1:
         # one parameter: a bounded scalar search on the concentrated cost (a few dozen solves,
         # where the trust-region solver spends most of its evaluations on finite differences)
+        def cost1(x: float) -> float:
+            return float(np.sum(resid(np.array([x])) ** 2))
+
         step = (hi[0] - lo[0]) / max(len(params[free[0]].grid), 4)
-        centre = _past_grid_end(u0[0], [to_u(free[0], g) for g in params[free[0]].grid], lo[0], hi[0], resid)
+        grid_u = [to_u(free[0], g) for g in params[free[0]].grid]
+        centre = _past_grid_end(u0[0], cost0, grid_u, lo[0], hi[0], cost1)
         a, b = max(lo[0], centre - step), min(hi[0], centre + step)
         sol1 = optimize.minimize_scalar(
-            lambda x: float(np.sum(resid(np.array([x])) ** 2)),
+            cost1,
             bounds=(a, b),
             method="bounded",
             # 1e-6 of the range: a channel delay's range is 90 ms and the ODE referee's sub-sample

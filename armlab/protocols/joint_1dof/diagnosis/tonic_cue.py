@@ -186,8 +186,10 @@ def tonic_cue_check(trials, slow_hz: float) -> dict:
 
     Returns:
         ``{"perturbation_share": mean over trials, "per_trial": [...], "max_share":
-        MAX_PERTURBATION_SHARE, "driven": mean >= max_share}`` (the diagnosis adds ``excluded``
-        and ``held``).
+        MAX_PERTURBATION_SHARE, "envelope_follow": mean over trials of :func:`envelope_follow` on
+        the nominal's residual, "envelope_follow_per_trial": [...], "min_follow":
+        MIN_ENVELOPE_FOLLOW, "driven": share >= max_share, "rectified": driven and follow >=
+        min_follow}`` (the diagnosis adds ``excluded`` and ``held``).
     """
     per, follow = [], []
     for tr in trials:
@@ -198,6 +200,7 @@ def tonic_cue_check(trials, slow_hz: float) -> dict:
         beta, *_ = np.linalg.lstsq(basis[tr.train], tr.y[tr.train], rcond=None)
         follow.append(envelope_follow(tr.y - basis @ beta, tr.v, k, tr.fs_hz))
     share, follows = float(np.mean(per)), float(np.mean(follow))
+    driven = share >= MAX_PERTURBATION_SHARE
     return {
         "perturbation_share": share,
         "per_trial": per,
@@ -205,8 +208,8 @@ def tonic_cue_check(trials, slow_hz: float) -> dict:
         "envelope_follow": follows,
         "envelope_follow_per_trial": follow,
         "min_follow": MIN_ENVELOPE_FOLLOW,
-        "driven": bool(share >= MAX_PERTURBATION_SHARE),
-        "rectified": bool(share >= MAX_PERTURBATION_SHARE and follows >= MIN_ENVELOPE_FOLLOW),
+        "driven": bool(driven),
+        "rectified": bool(driven and follows >= MIN_ENVELOPE_FOLLOW),
     }
 
 
